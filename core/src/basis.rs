@@ -1,0 +1,132 @@
+//! The [`BasisSpace`] trait: a space of piecewise-polynomial basis functions on a knot
+//! vector, evaluated into caller buffers and refined or coarsened by exact knot maps.
+//!
+//! A curve in the space is \\(C(s) = \sum_i q_i\, b_i(s)\\) (paper eq. 1). Only `d + 1`
+//! functions are non-zero at any parameter, so evaluation returns the index of the first
+//! one and their values and first two derivatives in a fixed-size [`BasisValues`].
+
+use crate::{CoreError, KnotMap, Real};
+use std::fmt;
+
+/// Largest polynomial degree a basis space supports. Fixed so that evaluation needs no
+/// heap allocation; degree 9 is far beyond what rods need (cubic is the default).
+pub const MAX_DEGREE: usize = 9;
+
+/// Largest number of basis functions non-zero at one parameter (`MAX_DEGREE + 1`).
+pub const MAX_ORDER: usize = MAX_DEGREE + 1;
+
+/// Values and derivatives of the basis functions that are non-zero at one parameter.
+///
+/// Function `first + k` has value `value[k]`, first derivative `d1[k]` and second
+/// derivative `d2[k]`, for `k < order`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BasisValues {
+    /// Index of the first non-zero basis function.
+    pub first: usize,
+    /// Number of non-zero functions (`degree + 1`).
+    pub order: usize,
+    /// Values \\(b_{first+k}(s)\\).
+    pub value: [Real; MAX_ORDER],
+    /// First derivatives \\(b'_{first+k}(s)\\).
+    pub d1: [Real; MAX_ORDER],
+    /// Second derivatives \\(b''_{first+k}(s)\\).
+    pub d2: [Real; MAX_ORDER],
+}
+
+impl Default for BasisValues {
+    fn default() -> Self {
+        Self {
+            first: 0,
+            order: 0,
+            value: [0.0; MAX_ORDER],
+            d1: [0.0; MAX_ORDER],
+            d2: [0.0; MAX_ORDER],
+        }
+    }
+}
+
+impl BasisValues {
+    /// Combines per-control-point coefficients with the values: \\(\sum_k b_{first+k}\, c_{first+k}\\).
+    #[inline]
+    pub fn combine<T>(&self, weights: &[Real; MAX_ORDER], coefficients: &[T]) -> T
+    where
+        T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Real, Output = T> + Default,
+    {
+        let mut sum = T::default();
+        for (k, w) in weights.iter().enumerate().take(self.order) {
+            sum = sum + coefficients[self.first + k] * *w;
+        }
+        sum
+    }
+}
+
+/// A space of piecewise-polynomial basis functions on a knot vector.
+///
+/// Required: everything except [`domain`](BasisSpace::domain). Implementations must be
+/// exact under [`insert_knot`](BasisSpace::insert_knot): the returned [`KnotMap`]
+/// expresses every old basis function in the new ones (paper eq. 3), so any curve keeps
+/// its shape when its coefficients go through the map.
+pub trait BasisSpace: Send + Sync + fmt::Debug {
+    /// Polynomial degree `d`.
+    fn degree(&self) -> usize;
+    /// Number of basis functions (control points).
+    fn count(&self) -> usize;
+    /// The knot vector, `count + degree + 1` non-decreasing values.
+    fn knots(&self) -> &[Real];
+    /// Parameter domain `[t_d, t_count]`, where the functions sum to one.
+    fn domain(&self) -> (Real, Real) {
+        let (t, d) = (self.knots(), self.degree());
+        (t[d], t[self.count()])
+    }
+    /// Writes the non-zero functions at `s` and their first two derivatives into `out`.
+    /// Fails if `s` is outside the domain or not finite.
+    fn evaluate(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError>;
+    /// Inserts the knot value `s` (strictly inside the domain) and returns the exact
+    /// old→new coefficient map.
+    fn insert_knot(&mut self, s: Real) -> Result<KnotMap, CoreError>;
+    /// The map that removing knot `index` would apply (least-squares inverse of its
+    /// insertion), without changing the space. Use [`KnotMap::shape_error`] on it to
+    /// decide whether the removal is acceptable.
+    fn removal(&self, index: usize) -> Result<KnotMap, CoreError>;
+    /// Removes knot `index` (one instance of its value) and returns the map.
+    fn remove_knot(&mut self, index: usize) -> Result<KnotMap, CoreError>;
+    /// A boxed copy, so rods holding `Box<dyn BasisSpace>` can be cloned.
+    fn clone_box(&self) -> Box<dyn BasisSpace>;
+}
+
+impl Clone for Box<dyn BasisSpace> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}
+
+/// A non-empty knot span `[start, end)` and the index of the first basis function that
+/// is non-zero on it (the others follow consecutively, `degree + 1` in all).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Span {
+    /// Span start.
+    pub start: Real,
+    /// Span end (`> start`).
+    pub end: Real,
+    /// Index of the first non-zero basis function on the span.
+    pub first: usize,
+}
+
+/// The non-empty spans of `space` inside its domain, in order. Zero-length spans (repeated
+/// knots, cuts) are skipped: they carry no material.
+pub fn spans(space: &dyn BasisSpace) -> impl Iterator<Item = Span> + '_ {
+    let (t, d, n) = (space.knots(), space.degree(), space.count());
+    (d..n).filter(move |&k| t[k + 1] > t[k]).map(move |k| Span {
+        start: t[k],
+        end: t[k + 1],
+        first: k - d,
+    })
+}
+
+/// Greville abscissa of basis function `i`: the mean of knots `i+1 ..= i+d`. Control
+/// points of a straight line placed at these parameters reproduce it exactly.
+#[track_caller]
+pub fn greville(space: &dyn BasisSpace, i: usize) -> Real {
+    let d = space.degree();
+    space.knots()[i + 1..=i + d].iter().sum::<Real>() / d as Real
+}

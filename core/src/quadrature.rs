@@ -1,0 +1,177 @@
+//! Gauss–Legendre quadrature per knot span, and the [`QuadratureTable`] that caches the
+//! basis functions at every quadrature point of a rod.
+//!
+//! With `m` points per span the rule is exact for polynomials of degree `2m − 1`. The
+//! integrands that matter for a degree-`d` spline with constant rest metric are the mass
+//! \\(\mu b_i b_j\\) (degree `2d`) and the Green–Lagrange stretching density
+//! \\((|C'|^2-1)^2\\) and its derivatives (degree `4(d−1)`), so the default is
+//! `m = max(d + 1, 2d − 1)`: exact for both.
+
+use crate::basis::{spans, BasisSpace, BasisValues, MAX_ORDER};
+use crate::{CoreError, Real};
+
+/// Gauss–Legendre nodes and weights on `[0, 1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaussLegendre {
+    /// Nodes in `(0, 1)`, increasing.
+    pub nodes: Vec<Real>,
+    /// Weights, summing to one.
+    pub weights: Vec<Real>,
+}
+
+impl GaussLegendre {
+    /// The `m`-point rule (`m ≥ 1`), from Newton iteration on the Legendre polynomial.
+    #[track_caller]
+    pub fn new(m: usize) -> Self {
+        assert!(m >= 1, "a quadrature rule needs at least one point");
+        let mut nodes = vec![0.0; m];
+        let mut weights = vec![0.0; m];
+        for i in 0..m {
+            // Initial guess for the i-th largest root of P_m on [-1, 1].
+            let mut x = (std::f64::consts::PI * (i as Real + 0.75) / (m as Real + 0.5)).cos();
+            for _ in 0..100 {
+                let (p, d) = legendre(m, x);
+                let dx = p / d;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            let (_, d) = legendre(m, x);
+            // Map [-1, 1] to [0, 1]; store in ascending order.
+            nodes[m - 1 - i] = 0.5 * (x + 1.0);
+            weights[m - 1 - i] = 1.0 / ((1.0 - x * x) * d * d);
+        }
+        Self { nodes, weights }
+    }
+
+    /// Points needed to integrate the mass (degree `2d`) and Green–Lagrange stretching
+    /// (degree `4(d − 1)`) integrands of a degree-`d` spline exactly: `max(d + 1, 2d − 1)`.
+    pub fn points_for_degree(degree: usize) -> usize {
+        (degree + 1).max((2 * degree).saturating_sub(1))
+    }
+}
+
+/// Legendre polynomial P_m(x) and its derivative, by the three-term recurrence.
+fn legendre(m: usize, x: Real) -> (Real, Real) {
+    let (mut p0, mut p1) = (1.0, x);
+    for k in 2..=m {
+        let kf = k as Real;
+        let p2 = ((2.0 * kf - 1.0) * x * p1 - (kf - 1.0) * p0) / kf;
+        p0 = p1;
+        p1 = p2;
+    }
+    let p = if m == 0 { 1.0 } else { p1 };
+    let d = if m == 0 {
+        0.0
+    } else {
+        m as Real * (x * p - p0) / (x * x - 1.0)
+    };
+    (p, d)
+}
+
+/// One quadrature point: parameter, weight (including the span length) and the basis
+/// functions non-zero there.
+#[derive(Debug, Clone, Copy)]
+pub struct QuadPoint<'a> {
+    /// Parameter (rest arclength).
+    pub s: Real,
+    /// Integration weight `w · (span length)`.
+    pub weight: Real,
+    /// Index of the first non-zero basis function.
+    pub first: usize,
+    /// Values of the non-zero basis functions.
+    pub value: &'a [Real],
+    /// Their first derivatives.
+    pub d1: &'a [Real],
+    /// Their second derivatives.
+    pub d2: &'a [Real],
+}
+
+/// Basis functions tabulated at the Gauss points of every non-empty span.
+///
+/// Every energy and the mass matrix integrate over the rod through this table, so the
+/// basis is evaluated once per change of knots, not once per step.
+#[derive(Debug, Clone, Default)]
+pub struct QuadratureTable {
+    order: usize,
+    s: Vec<Real>,
+    weight: Vec<Real>,
+    first: Vec<usize>,
+    value: Vec<Real>,
+    d1: Vec<Real>,
+    d2: Vec<Real>,
+    points_per_span: usize,
+}
+
+impl QuadratureTable {
+    /// Tabulates `space` with `points_per_span` Gauss points on each non-empty span.
+    pub fn new(space: &dyn BasisSpace, points_per_span: usize) -> Result<Self, CoreError> {
+        let rule = GaussLegendre::new(points_per_span.max(1));
+        let mut table = Self {
+            order: space.degree() + 1,
+            points_per_span: rule.nodes.len(),
+            ..Self::default()
+        };
+        let mut b = BasisValues::default();
+        for span in spans(space) {
+            let h = span.end - span.start;
+            for (x, w) in rule.nodes.iter().zip(&rule.weights) {
+                let s = span.start + h * x;
+                space.evaluate(s, &mut b)?;
+                table.push(s, w * h, &b);
+            }
+        }
+        Ok(table)
+    }
+
+    fn push(&mut self, s: Real, weight: Real, b: &BasisValues) {
+        let o = self.order.min(MAX_ORDER);
+        self.s.push(s);
+        self.weight.push(weight);
+        self.first.push(b.first);
+        self.value.extend_from_slice(&b.value[..o]);
+        self.d1.extend_from_slice(&b.d1[..o]);
+        self.d2.extend_from_slice(&b.d2[..o]);
+    }
+
+    /// Number of quadrature points.
+    pub fn len(&self) -> usize {
+        self.s.len()
+    }
+
+    /// Whether the table has no points.
+    pub fn is_empty(&self) -> bool {
+        self.s.is_empty()
+    }
+
+    /// Gauss points per non-empty span.
+    pub fn points_per_span(&self) -> usize {
+        self.points_per_span
+    }
+
+    /// Number of basis functions non-zero at each point (`degree + 1`).
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Quadrature point `p`.
+    #[inline]
+    pub fn point(&self, p: usize) -> QuadPoint<'_> {
+        let o = self.order;
+        let range = p * o..(p + 1) * o;
+        QuadPoint {
+            s: self.s[p],
+            weight: self.weight[p],
+            first: self.first[p],
+            value: &self.value[range.clone()],
+            d1: &self.d1[range.clone()],
+            d2: &self.d2[range],
+        }
+    }
+
+    /// All points, in increasing parameter order.
+    pub fn points(&self) -> impl Iterator<Item = QuadPoint<'_>> + '_ {
+        (0..self.len()).map(|p| self.point(p))
+    }
+}

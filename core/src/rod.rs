@@ -1,0 +1,296 @@
+//! [`Rod`]: a B-spline centreline whose control points are the degrees of freedom.
+//!
+//! The curve is \\(C(s,t) = \sum_i q_i(t)\, b_i(s)\\) with `s` the rest arclength in
+//! `[0, L]` (so \\(\partial l_0/\partial s = 1\\)). Every physical quantity is an integral
+//! over `s`, independent of the knots:
+//!
+//! * mass matrix (paper eq. 10) \\(M_{ij} = \int_0^L \mu\, b_i b_j\, ds\\),
+//! * lumped masses \\(m_i = \int_0^L \mu\, b_i\, ds = \sum_j M_{ij}\\) (gravity's
+//!   generalised force is \\(m_i g\\), momentum \\(\sum_i m_i \dot q_i\\)),
+//! * kinetic energy \\(\tfrac12 \sum_{ij} M_{ij}\, \dot q_i \cdot \dot q_j\\).
+//!
+//! Knot insertion changes the basis but not the curve, its velocity, nor any of these.
+
+use crate::banded::SymBanded;
+use crate::basis::{greville, BasisSpace, BasisValues};
+use crate::knot_map::KnotMap;
+use crate::quadrature::{GaussLegendre, QuadratureTable};
+use crate::{CoreError, Real};
+use nalgebra::Vector3;
+
+/// Material constants of a rod that the core needs (energies carry their own stiffness).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    /// Rest length `L`, m. The basis domain is `[0, L]`.
+    pub rest_length: Real,
+    /// Mass per unit rest length `μ`, kg/m.
+    pub linear_density: Real,
+}
+
+impl Material {
+    /// Checks that both constants are finite and positive.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        positive("rest_length", self.rest_length)?;
+        positive("linear_density", self.linear_density)
+    }
+}
+
+/// Error unless `value` is finite and positive.
+pub fn positive(name: &'static str, value: Real) -> Result<(), CoreError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(CoreError::InvalidParameter {
+            name,
+            value,
+            reason: "must be finite and positive",
+        })
+    }
+}
+
+/// Error unless `value` is finite and non-negative.
+pub fn non_negative(name: &'static str, value: Real) -> Result<(), CoreError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(CoreError::InvalidParameter {
+            name,
+            value,
+            reason: "must be finite and non-negative",
+        })
+    }
+}
+
+/// A rod: state (`positions`, `velocities`) in public fields, and the basis with its
+/// cached quadrature and mass matrix, which change only through knot operations.
+#[derive(Debug, Clone)]
+pub struct Rod {
+    /// Control points `q_i`, m.
+    pub positions: Vec<Vector3<Real>>,
+    /// Control point velocities, m/s.
+    pub velocities: Vec<Vector3<Real>>,
+    /// Mass-proportional damping coefficient `α`, 1/s: force \\(-\alpha M \dot q\\).
+    pub damping: Real,
+    material: Material,
+    basis: Box<dyn BasisSpace>,
+    quadrature: QuadratureTable,
+    mass: SymBanded,
+    lumped: Vec<Real>,
+    topology_epoch: u64,
+}
+
+impl Rod {
+    /// A rod at rest with the given control points on `basis` (domain `[0, L]`).
+    pub fn new(
+        material: Material,
+        basis: Box<dyn BasisSpace>,
+        positions: Vec<Vector3<Real>>,
+    ) -> Result<Self, CoreError> {
+        material.validate()?;
+        let (start, end) = basis.domain();
+        let l = material.rest_length;
+        if start.abs() > 1e-12 * l || (end - l).abs() > 1e-12 * l {
+            return Err(CoreError::DomainMismatch {
+                start,
+                end,
+                rest_length: l,
+            });
+        }
+        let n = basis.count();
+        if positions.len() != n {
+            let found = positions.len();
+            return Err(CoreError::CountMismatch {
+                what: "control points",
+                expected: n,
+                found,
+            });
+        }
+        check_finite("control point", &positions)?;
+        let mut rod = Self {
+            velocities: vec![Vector3::zeros(); n],
+            positions,
+            damping: 0.0,
+            material,
+            basis,
+            quadrature: QuadratureTable::default(),
+            mass: SymBanded::default(),
+            lumped: Vec::new(),
+            topology_epoch: 0,
+        };
+        rod.rebuild_caches()?;
+        Ok(rod)
+    }
+
+    /// A straight rod at rest from `start` to `end`, uniformly parametrised (control
+    /// points at the Greville abscissae, which reproduce the line exactly).
+    pub fn straight(
+        material: Material,
+        basis: Box<dyn BasisSpace>,
+        start: Vector3<Real>,
+        end: Vector3<Real>,
+    ) -> Result<Self, CoreError> {
+        material.validate()?;
+        let l = material.rest_length;
+        let positions = (0..basis.count())
+            .map(|i| start + (end - start) * (greville(basis.as_ref(), i) / l))
+            .collect();
+        Self::new(material, basis, positions)
+    }
+
+    /// Recomputes quadrature, mass matrix and lumped masses from the basis.
+    fn rebuild_caches(&mut self) -> Result<(), CoreError> {
+        let d = self.basis.degree();
+        let points = GaussLegendre::points_for_degree(d);
+        self.quadrature = QuadratureTable::new(self.basis.as_ref(), points)?;
+        let n = self.basis.count();
+        let mu = self.material.linear_density;
+        let mut mass = SymBanded::zeros(n, d);
+        let mut lumped = vec![0.0; n];
+        for qp in self.quadrature.points() {
+            for a in 0..qp.value.len() {
+                let wa = mu * qp.weight * qp.value[a];
+                lumped[qp.first + a] += wa;
+                for b in a..qp.value.len() {
+                    mass.add(qp.first + a, qp.first + b, wa * qp.value[b]);
+                }
+            }
+        }
+        self.mass = mass;
+        self.lumped = lumped;
+        Ok(())
+    }
+
+    /// Material constants.
+    pub fn material(&self) -> &Material {
+        &self.material
+    }
+    /// The basis space.
+    pub fn basis(&self) -> &dyn BasisSpace {
+        self.basis.as_ref()
+    }
+    /// Number of control points.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+    /// Whether the rod has no control points (never true for a constructed rod).
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+    /// Basis tabulated at the quadrature points.
+    pub fn quadrature(&self) -> &QuadratureTable {
+        &self.quadrature
+    }
+    /// Mass matrix `M` (scalar; acts on each coordinate).
+    pub fn mass_matrix(&self) -> &SymBanded {
+        &self.mass
+    }
+    /// Lumped masses \\(m_i = \int \mu b_i\\).
+    pub fn lumped_masses(&self) -> &[Real] {
+        &self.lumped
+    }
+    /// Counter incremented by every change of basis; solvers redo their symbolic
+    /// analysis when it changes.
+    pub fn topology_epoch(&self) -> u64 {
+        self.topology_epoch
+    }
+    /// Total mass `μ L`.
+    pub fn total_mass(&self) -> Real {
+        self.lumped.iter().sum()
+    }
+
+    /// Kinetic energy \\(\tfrac12 \dot q^T M \dot q\\).
+    pub fn kinetic_energy(&self) -> Real {
+        0.5 * self.mass.bilinear_vec3(&self.velocities, &self.velocities)
+    }
+
+    /// Linear momentum \\(\int \mu \dot C\, ds = \sum_i m_i \dot q_i\\).
+    pub fn linear_momentum(&self) -> Vector3<Real> {
+        self.lumped
+            .iter()
+            .zip(&self.velocities)
+            .map(|(m, v)| v * *m)
+            .sum()
+    }
+
+    /// Centre of mass \\(\frac{1}{\mu L}\int \mu C\, ds\\).
+    pub fn centre_of_mass(&self) -> Vector3<Real> {
+        let p: Vector3<Real> = self
+            .lumped
+            .iter()
+            .zip(&self.positions)
+            .map(|(m, q)| q * *m)
+            .sum();
+        p / self.total_mass()
+    }
+
+    /// Evaluates the basis at material coordinate `s`.
+    pub fn basis_at(&self, s: Real) -> Result<BasisValues, CoreError> {
+        let mut b = BasisValues::default();
+        self.basis.evaluate(s, &mut b)?;
+        Ok(b)
+    }
+
+    /// Position \\(C(s)\\) of material point `s`.
+    pub fn point(&self, s: Real) -> Result<Vector3<Real>, CoreError> {
+        let b = self.basis_at(s)?;
+        Ok(b.combine(&b.value, &self.positions))
+    }
+
+    /// Velocity \\(\dot C(s)\\) of material point `s`.
+    pub fn velocity(&self, s: Real) -> Result<Vector3<Real>, CoreError> {
+        let b = self.basis_at(s)?;
+        Ok(b.combine(&b.value, &self.velocities))
+    }
+
+    /// Tangent \\(C'(s)\\); its length is the stretch `γ`.
+    pub fn tangent(&self, s: Real) -> Result<Vector3<Real>, CoreError> {
+        let b = self.basis_at(s)?;
+        Ok(b.combine(&b.d1, &self.positions))
+    }
+
+    /// Error naming the first non-finite position or velocity, if any.
+    pub fn check_finite(&self) -> Result<(), CoreError> {
+        check_finite("control point", &self.positions)?;
+        check_finite("velocity", &self.velocities)
+    }
+
+    /// Inserts knot `s` (strictly inside `(0, L)`): positions and velocities go through
+    /// the exact map, so the curve, its motion and every energy are unchanged.
+    pub fn insert_knot(&mut self, s: Real) -> Result<KnotMap, CoreError> {
+        let map = self.basis.insert_knot(s)?;
+        self.after_knot_change(map)
+    }
+
+    /// Removes knot `index` if that moves the curve by at most `tolerance` (m); otherwise
+    /// returns [`CoreError::RemovalNotWithinTolerance`] and changes nothing.
+    pub fn remove_knot(&mut self, index: usize, tolerance: Real) -> Result<KnotMap, CoreError> {
+        non_negative("tolerance", tolerance)?;
+        let candidate = self.basis.removal(index)?;
+        let error = candidate.shape_error(&self.positions);
+        if error.is_nan() || error > tolerance {
+            return Err(CoreError::RemovalNotWithinTolerance {
+                index,
+                error,
+                tolerance,
+            });
+        }
+        let map = self.basis.remove_knot(index)?;
+        self.after_knot_change(map)
+    }
+
+    fn after_knot_change(&mut self, map: KnotMap) -> Result<KnotMap, CoreError> {
+        map.apply_in_place(&mut self.positions);
+        map.apply_in_place(&mut self.velocities);
+        self.topology_epoch += 1;
+        self.rebuild_caches()?;
+        Ok(map)
+    }
+}
+
+/// Error naming the first non-finite vector of `field`.
+pub fn check_finite(what: &'static str, field: &[Vector3<Real>]) -> Result<(), CoreError> {
+    match field.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
+        Some(index) => Err(CoreError::NonFiniteState { what, index }),
+        None => Ok(()),
+    }
+}

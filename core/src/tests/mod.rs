@@ -1,0 +1,32 @@
+//! Unit tests of the core kernels.
+mod basis;
+mod knots;
+mod rod;
+
+use crate::{BSplineSpace, BasisSpace, Real};
+
+/// A clamped or uniform space with some random-ish interior knots, for the tests.
+pub(crate) fn irregular_space(degree: usize, length: Real) -> BSplineSpace {
+    let mut space = BSplineSpace::clamped_uniform(degree, degree + 4, length).unwrap();
+    for f in [0.13, 0.37, 0.38, 0.61, 0.9] {
+        space.insert_knot(f * length).unwrap();
+    }
+    space
+}
+
+pub(crate) fn all_test_spaces() -> Vec<BSplineSpace> {
+    let mut v = Vec::new();
+    for d in 1..=5 {
+        v.push(BSplineSpace::clamped_uniform(d, d + 7, 1.3).unwrap());
+        v.push(BSplineSpace::uniform(d, d + 6, 0.7).unwrap());
+        v.push(irregular_space(d, 2.0));
+    }
+    v
+}
+
+#[test]
+fn test_spaces_are_valid() {
+    for s in all_test_spaces() {
+        assert_eq!(s.knots().len(), s.count() + s.degree() + 1);
+    }
+}
