@@ -1,0 +1,293 @@
+//! A conformance harness that every [`Energy`] must pass, written once and run on each
+//! implementation: gradient against central differences of the energy, exact Hessian
+//! against central differences of the gradient, symmetry, positive semi-definiteness of
+//! the Newton (definite) Hessian, invariance under rigid motions, exact invariance and
+//! covariance under knot insertion (\\(E_1(\beta q) = E_0(q)\\),
+//! \\(\nabla E_0 = \beta^T \nabla E_1\\)), and zero energy and force at rest.
+//!
+//! The test rods cover degrees 2–4, clamped, uniform and irregular knots (one repeated),
+//! at rest, stretched, compressed and bent in 3D.
+
+use crate::Energy;
+use nalgebra::{Rotation3, Vector3};
+use splinerod_core::{BSplineSpace, BasisSpace, BlockBanded, HessianKind, Material, Real, Rod};
+
+/// Which invariance under rigid motions the energy has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RigidInvariance {
+    /// Invariant under every rotation and translation (internal energies).
+    Full,
+    /// Invariant under translations orthogonal to `axis` and rotations about it (gravity
+    /// along `axis`).
+    AboutAxis(Vector3<Real>),
+    /// No invariance to check.
+    None,
+}
+
+/// What the harness should expect of an energy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Expectations {
+    /// Energy and gradient vanish on a straight rod at rest length.
+    pub zero_at_rest: bool,
+    /// Rigid-motion invariance.
+    pub rigid: RigidInvariance,
+}
+
+/// Largest relative discrepancies the harness measured.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Report {
+    /// Gradient vs finite differences of the energy.
+    pub gradient: Real,
+    /// Exact Hessian vs finite differences of the gradient.
+    pub hessian: Real,
+    /// Most negative eigenvalue of the definite Hessian, relative to the largest.
+    pub definiteness: Real,
+    /// Energy change under rigid motion.
+    pub rigid: Real,
+    /// Energy and gradient change under knot insertion.
+    pub refinement: Real,
+    /// Energy and gradient at rest, relative to a stretched state's.
+    pub rest: Real,
+}
+
+/// Tolerances of the checks. Central differences with h ≈ 1e-5·L leave O(h²) ≈ 1e-10
+/// truncation and O(ε/h) ≈ 1e-11 round-off relative to the quantity's scale, so 1e-6
+/// is generous; the invariances are exact and are held to round-off.
+pub const DIFFERENCE_TOLERANCE: Real = 1e-6;
+/// Tolerance of exact identities (invariances, symmetry), relative.
+pub const EXACT_TOLERANCE: Real = 1e-11;
+
+/// Runs every check on `energy` and returns the measured discrepancies, or a message
+/// naming the first failed check with its figures.
+pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report, String> {
+    let mut report = Report::default();
+    for (label, rod) in test_rods() {
+        let fail =
+            |what: &str, value: Real| format!("{}: {what} = {value:e} on {label}", energy.name());
+        let measure = |value: Real, tol: Real, what: &str, worst: &mut Real| {
+            *worst = worst.max(value);
+            if value <= tol {
+                Ok(())
+            } else {
+                Err(fail(what, value))
+            }
+        };
+        measure(
+            gradient_error(energy, &rod),
+            DIFFERENCE_TOLERANCE,
+            "gradient error",
+            &mut report.gradient,
+        )?;
+        measure(
+            hessian_error(energy, &rod),
+            DIFFERENCE_TOLERANCE,
+            "Hessian error",
+            &mut report.hessian,
+        )?;
+        measure(
+            negativity(energy, &rod),
+            EXACT_TOLERANCE,
+            "definite Hessian negativity",
+            &mut report.definiteness,
+        )?;
+        measure(
+            rigid_error(energy, &rod, expect.rigid),
+            EXACT_TOLERANCE,
+            "rigid-motion change",
+            &mut report.rigid,
+        )?;
+        measure(
+            refinement_error(energy, &rod),
+            EXACT_TOLERANCE,
+            "knot-insertion change",
+            &mut report.refinement,
+        )?;
+    }
+    if expect.zero_at_rest {
+        report.rest = rest_error(energy);
+        if report.rest > EXACT_TOLERANCE {
+            return Err(format!(
+                "{}: energy or force at rest = {:e}",
+                energy.name(),
+                report.rest
+            ));
+        }
+    }
+    Ok(report)
+}
+
+fn spaces() -> Vec<(String, BSplineSpace)> {
+    let mut out = Vec::new();
+    for d in 2..=4 {
+        out.push((
+            format!("clamped d={d}"),
+            BSplineSpace::clamped_uniform(d, d + 5, 1.3).unwrap(),
+        ));
+        out.push((
+            format!("uniform d={d}"),
+            BSplineSpace::uniform(d, d + 4, 1.3).unwrap(),
+        ));
+        let mut irregular = BSplineSpace::clamped_uniform(d, d + 3, 1.3).unwrap();
+        for s in [0.2, 0.5, 0.5, 0.71] {
+            irregular.insert_knot(s).unwrap();
+        }
+        out.push((format!("irregular d={d}"), irregular));
+    }
+    out
+}
+
+/// Deterministic pseudo-random numbers in [-1, 1].
+fn noise(i: usize, k: usize) -> Real {
+    ((i * 7919 + k * 104_729) as Real * 0.618_033_988_75).sin()
+}
+
+fn rod_on(space: &BSplineSpace, stretch: Real, wiggle: Real) -> Rod {
+    let material = Material {
+        rest_length: 1.3,
+        linear_density: 0.2,
+    };
+    let end = Vector3::new(1.3 * stretch, 0.0, 0.0);
+    let mut rod = Rod::straight(material, Box::new(space.clone()), Vector3::zeros(), end).unwrap();
+    for (i, q) in rod.positions.iter_mut().enumerate() {
+        *q += Vector3::new(noise(i, 0), noise(i, 1), noise(i, 2)) * wiggle;
+    }
+    rod
+}
+
+/// Labelled rods in varied states.
+pub fn test_rods() -> Vec<(String, Rod)> {
+    let mut out = Vec::new();
+    for (name, space) in spaces() {
+        for (state, stretch, wiggle) in [
+            ("stretched", 1.15, 0.02),
+            ("compressed", 0.7, 0.05),
+            ("bent", 1.0, 0.3),
+        ] {
+            out.push((format!("{name}, {state}"), rod_on(&space, stretch, wiggle)));
+        }
+    }
+    out
+}
+
+fn gradient_of(energy: &dyn Energy, rod: &Rod) -> Vec<Vector3<Real>> {
+    let mut g = vec![Vector3::zeros(); rod.len()];
+    energy.add_gradient(rod, &mut g);
+    g
+}
+
+fn max_norm(v: &[Vector3<Real>]) -> Real {
+    v.iter().map(|x| x.amax()).fold(0.0, Real::max)
+}
+
+fn gradient_error(energy: &dyn Energy, rod: &Rod) -> Real {
+    let g = gradient_of(energy, rod);
+    let h = 1e-5 * rod.material().rest_length;
+    let mut probe = rod.clone();
+    let mut worst: Real = 0.0;
+    for i in 0..rod.len() {
+        for a in 0..3 {
+            probe.positions[i][a] = rod.positions[i][a] + h;
+            let plus = energy.energy(&probe);
+            probe.positions[i][a] = rod.positions[i][a] - h;
+            let minus = energy.energy(&probe);
+            probe.positions[i][a] = rod.positions[i][a];
+            worst = worst.max(((plus - minus) / (2.0 * h) - g[i][a]).abs());
+        }
+    }
+    worst / max_norm(&g).max(Real::MIN_POSITIVE)
+}
+
+fn hessian_of(energy: &dyn Energy, rod: &Rod, kind: HessianKind) -> nalgebra::DMatrix<Real> {
+    let mut h = BlockBanded::zeros(rod.len(), rod.basis().degree());
+    energy.add_hessian(rod, kind, &mut h);
+    h.to_dense()
+}
+
+fn hessian_error(energy: &dyn Energy, rod: &Rod) -> Real {
+    let exact = hessian_of(energy, rod, HessianKind::Exact);
+    let h = 1e-5 * rod.material().rest_length;
+    let mut probe = rod.clone();
+    let mut worst: Real = 0.0;
+    for i in 0..rod.len() {
+        for a in 0..3 {
+            probe.positions[i][a] = rod.positions[i][a] + h;
+            let plus = gradient_of(energy, &probe);
+            probe.positions[i][a] = rod.positions[i][a] - h;
+            let minus = gradient_of(energy, &probe);
+            probe.positions[i][a] = rod.positions[i][a];
+            for j in 0..rod.len() {
+                for b in 0..3 {
+                    let fd = (plus[j][b] - minus[j][b]) / (2.0 * h);
+                    worst = worst.max((fd - exact[(3 * j + b, 3 * i + a)]).abs());
+                }
+            }
+        }
+    }
+    let asymmetry = (&exact - exact.transpose()).amax();
+    worst.max(asymmetry) / exact.amax().max(Real::MIN_POSITIVE)
+}
+
+fn negativity(energy: &dyn Energy, rod: &Rod) -> Real {
+    let h = hessian_of(energy, rod, HessianKind::Definite);
+    let scale = h.amax();
+    if scale == 0.0 {
+        return 0.0;
+    }
+    let eig = h.symmetric_eigenvalues();
+    (-eig.min()).max(0.0) / scale
+}
+
+fn rigid_error(energy: &dyn Energy, rod: &Rod, rigid: RigidInvariance) -> Real {
+    let (rotation, shift) = match rigid {
+        RigidInvariance::None => return 0.0,
+        RigidInvariance::Full => (
+            Rotation3::new(Vector3::new(0.3, -1.1, 0.7)),
+            Vector3::new(0.5, -2.0, 1.5),
+        ),
+        RigidInvariance::AboutAxis(axis) => {
+            let axis = axis.normalize();
+            let across = axis.cross(&Vector3::new(0.3, 0.5, 0.7)).normalize();
+            (Rotation3::new(axis * 0.9), across * 1.7)
+        }
+    };
+    let mut moved = rod.clone();
+    moved
+        .positions
+        .iter_mut()
+        .for_each(|q| *q = rotation * *q + shift);
+    let (e0, e1) = (energy.energy(rod), energy.energy(&moved));
+    (e1 - e0).abs() / e0.abs().max(Real::MIN_POSITIVE)
+}
+
+fn refinement_error(energy: &dyn Energy, rod: &Rod) -> Real {
+    let mut refined = rod.clone();
+    let mut maps = Vec::new();
+    for s in [0.123, 0.5, 1.0001] {
+        maps.push(refined.insert_knot(s).unwrap());
+    }
+    let (e0, e1) = (energy.energy(rod), energy.energy(&refined));
+    // Pull the refined gradient back: ∇E_0 = β_1ᵀ β_2ᵀ β_3ᵀ ∇E_1.
+    let mut g = gradient_of(energy, &refined);
+    for map in maps.iter().rev() {
+        g = (0..map.old_count())
+            .map(|j| (0..g.len()).map(|i| g[i] * map.weight(i, j)).sum())
+            .collect();
+    }
+    let g0 = gradient_of(energy, rod);
+    let scale = max_norm(&g0).max(Real::MIN_POSITIVE);
+    let dg = g
+        .iter()
+        .zip(&g0)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, Real::max);
+    ((e1 - e0).abs() / e0.abs().max(Real::MIN_POSITIVE)).max(dg / scale)
+}
+
+fn rest_error(energy: &dyn Energy) -> Real {
+    let space = BSplineSpace::clamped_uniform(3, 9, 1.3).unwrap();
+    let rest = rod_on(&space, 1.0, 0.0);
+    let stretched = rod_on(&space, 1.1, 0.0);
+    let scale_e = energy.energy(&stretched).abs().max(Real::MIN_POSITIVE);
+    let scale_g = max_norm(&gradient_of(energy, &stretched)).max(Real::MIN_POSITIVE);
+    (energy.energy(&rest).abs() / scale_e).max(max_norm(&gradient_of(energy, &rest)) / scale_g)
+}

@@ -1,0 +1,102 @@
+//! The [`Energy`] trait and its finite-difference Hessian default.
+
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::{BlockBanded, HessianKind, KnotMap, Real, Rod};
+
+/// A potential energy \\(E(q)\\) of a rod's control points.
+///
+/// Required: [`energy`](Energy::energy) and [`add_gradient`](Energy::add_gradient).
+/// [`add_hessian`](Energy::add_hessian) defaults to central finite differences of the
+/// gradient (O(n), slow but correct for energies coupling control points at most
+/// `degree` apart, i.e. any integral of the curve and its derivatives); real energies
+/// override it. [`on_knot_change`](Energy::on_knot_change) lets an energy with cached
+/// per-coefficient data update it locally; the default does nothing.
+///
+/// A minimal implementation, a spring holding the rod's first control point at the origin:
+/// ```
+/// use splinerod_core::{Real, Rod};
+/// use splinerod_energies::Energy;
+/// use nalgebra::Vector3;
+///
+/// struct Anchor { k: Real }
+/// impl Energy for Anchor {
+///     fn energy(&self, rod: &Rod) -> Real { 0.5 * self.k * rod.positions[0].norm_squared() }
+///     fn add_gradient(&self, rod: &Rod, g: &mut [Vector3<Real>]) { g[0] += rod.positions[0] * self.k }
+/// }
+/// ```
+pub trait Energy: Send + Sync {
+    /// Name used in reports; the type name by default.
+    fn name(&self) -> &str {
+        std::any::type_name::<Self>()
+    }
+
+    /// Energy at the rod's current positions, J.
+    fn energy(&self, rod: &Rod) -> Real;
+
+    /// Adds \\(\partial E/\partial q_i\\) to `gradient[i]` (one entry per control point).
+    fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]);
+
+    /// Adds the Hessian \\(\partial^2 E/\partial q_i \partial q_j\\) (or, for
+    /// [`HessianKind::Definite`], a positive semi-definite approximation) to `hessian`.
+    fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        let _ = kind;
+        finite_difference_hessian(self, rod, hessian);
+    }
+
+    /// Called after the rod's knots changed through `map`; update cached data locally.
+    fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
+        let _ = (rod, map);
+    }
+}
+
+/// Central finite differences of the gradient, assembled with a colouring of the control
+/// points: points `2d + 1` apart never share a span, so one pair of gradient evaluations
+/// per colour and coordinate gives all their columns. Cost: `6(2d + 1)` gradients.
+/// Exact up to O(h²) truncation (h ≈ ε^{1/3} · L) for energies local to the B-spline band.
+pub fn finite_difference_hessian<E: Energy + ?Sized>(
+    energy: &E,
+    rod: &Rod,
+    hessian: &mut BlockBanded,
+) {
+    let n = rod.len();
+    let d = rod.basis().degree();
+    let colours = 2 * d + 1;
+    let h = 6e-6 * rod.material().rest_length;
+    let mut probe = rod.clone();
+    let mut plus = vec![Vector3::zeros(); n];
+    let mut minus = vec![Vector3::zeros(); n];
+    // columns[α][j] = ∂g_j/∂q_i[α] for the perturbed i of j's colour class.
+    let mut columns = [
+        vec![Vector3::zeros(); n],
+        vec![Vector3::zeros(); n],
+        vec![Vector3::zeros(); n],
+    ];
+    for colour in 0..colours {
+        for (alpha, column) in columns.iter_mut().enumerate() {
+            for (sign, g) in [(1.0, &mut plus), (-1.0, &mut minus)] {
+                probe.positions.copy_from_slice(&rod.positions);
+                for i in (colour..n).step_by(colours) {
+                    probe.positions[i][alpha] += sign * h;
+                }
+                g.iter_mut().for_each(|x| *x = Vector3::zeros());
+                energy.add_gradient(&probe, g);
+            }
+            for j in 0..n {
+                column[j] = (plus[j] - minus[j]) / (2.0 * h);
+            }
+        }
+        for j in 0..n {
+            // The perturbed point of this colour within the band of j, if any, with i ≥ j.
+            let i = j + (colour + colours - j % colours) % colours;
+            if i >= n || i - j > d {
+                continue;
+            }
+            // block[β][α] = ∂g_j[β]/∂q_i[α]
+            let mut block = Matrix3::from_columns(&[columns[0][j], columns[1][j], columns[2][j]]);
+            if i == j {
+                block = 0.5 * (block + block.transpose());
+            }
+            hessian.add_block(j, i, &block);
+        }
+    }
+}

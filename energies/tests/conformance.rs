@@ -1,0 +1,86 @@
+//! Every energy shipped with splinerod passes the conformance harness. Adding an energy
+//! means adding one entry to `energies()`.
+
+use nalgebra::Vector3;
+use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
+use splinerod_energies::conformance::{check_energy, Expectations, RigidInvariance};
+use splinerod_energies::{finite_difference_hessian, Energy, Gravity, Stretching};
+
+fn energies() -> Vec<(Box<dyn Energy>, Expectations)> {
+    let g = Vector3::new(0.0, -9.81, 0.0);
+    vec![
+        (
+            Box::new(Stretching::new(100.0).unwrap()),
+            Expectations {
+                zero_at_rest: true,
+                rigid: RigidInvariance::Full,
+            },
+        ),
+        (
+            Box::new(Gravity::new(g).unwrap()),
+            Expectations {
+                zero_at_rest: false,
+                rigid: RigidInvariance::AboutAxis(g),
+            },
+        ),
+    ]
+}
+
+#[test]
+fn every_energy_conforms() {
+    for (energy, expect) in energies() {
+        let report = check_energy(energy.as_ref(), expect).unwrap_or_else(|e| panic!("{e}"));
+        println!("{}: {report:?}", energy.name());
+    }
+}
+
+/// The harness must be able to fail: a stretching energy with a wrong Hessian is caught.
+#[test]
+fn harness_catches_a_wrong_hessian() {
+    struct Wrong(Stretching);
+    impl Energy for Wrong {
+        fn energy(&self, rod: &Rod) -> Real {
+            self.0.energy(rod)
+        }
+        fn add_gradient(&self, rod: &Rod, g: &mut [Vector3<Real>]) {
+            self.0.add_gradient(rod, g)
+        }
+        fn add_hessian(&self, rod: &Rod, kind: HessianKind, h: &mut BlockBanded) {
+            self.0.add_hessian(rod, kind, h);
+            self.0.add_hessian(rod, kind, h); // twice: wrong by a factor 2
+        }
+    }
+    let expect = Expectations {
+        zero_at_rest: true,
+        rigid: RigidInvariance::Full,
+    };
+    let err = check_energy(&Wrong(Stretching::new(10.0).unwrap()), expect).unwrap_err();
+    assert!(err.contains("Hessian error"), "{err}");
+}
+
+/// The default finite-difference Hessian agrees with stretching's exact one.
+#[test]
+fn default_hessian_matches_exact_stretching() {
+    for (label, rod) in splinerod_energies::conformance::test_rods() {
+        let e = Stretching::new(100.0).unwrap();
+        let n = rod.len();
+        let d = rod.basis().degree();
+        let (mut exact, mut fd) = (BlockBanded::zeros(n, d), BlockBanded::zeros(n, d));
+        e.add_hessian(&rod, HessianKind::Exact, &mut exact);
+        finite_difference_hessian(&e, &rod, &mut fd);
+        let (a, b) = (exact.to_dense(), fd.to_dense());
+        // O(h²) truncation with h = 6e-6 L: 1e-6 relative is ample.
+        assert!(
+            (&a - &b).amax() < 1e-6 * a.amax(),
+            "{label}: {}",
+            (&a - &b).amax() / a.amax()
+        );
+    }
+}
+
+#[test]
+fn bad_parameters_are_errors() {
+    assert!(Stretching::new(0.0).is_err());
+    assert!(Stretching::new(Real::NAN).is_err());
+    assert!(Gravity::new(Vector3::new(0.0, Real::INFINITY, 0.0)).is_err());
+}
