@@ -169,6 +169,11 @@ impl BlockBanded {
         }
     }
 
+    /// Multiplies every entry by `c`.
+    pub fn scale(&mut self, c: Real) {
+        self.blocks.iter_mut().for_each(|b| *b *= c);
+    }
+
     /// Adds \\(c\, M \otimes I_3\\) for a scalar banded matrix `m` of the same size.
     #[track_caller]
     pub fn add_scaled_scalar(&mut self, c: Real, m: &SymBanded) {

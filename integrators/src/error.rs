@@ -1,0 +1,67 @@
+//! Errors of the integrators crate.
+
+use splinerod_core::{CoreError, Real};
+
+/// What can go wrong while stepping or solving. The system state is left as it was.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IntegratorError {
+    /// A parameter is out of range.
+    #[error("{name} = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// Value given.
+        value: Real,
+        /// What it must satisfy.
+        reason: &'static str,
+    },
+    /// The Newton matrix is not positive definite (a non-positive pivot in Cholesky).
+    #[error("the Newton matrix is not positive definite ({context})")]
+    NotPositiveDefinite {
+        /// Where it happened.
+        context: &'static str,
+    },
+    /// The pins constrain the same degrees of freedom twice (e.g. two pins at one point).
+    #[error("pins are redundant or conflicting: their constraint rows are linearly dependent")]
+    RedundantPins,
+    /// A value became NaN or infinite; the step was rolled back.
+    #[error("the step produced non-finite {what}; state rolled back (try a smaller dt)")]
+    NonFinite {
+        /// Which quantity.
+        what: &'static str,
+    },
+    /// Newton did not reach the tolerance.
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:e})")]
+    NotConverged {
+        /// Iterations done.
+        iterations: usize,
+        /// Final residual norm.
+        residual: Real,
+    },
+    /// A dense analysis was asked of a system too large for it.
+    #[error("{what} needs a dense matrix: {dofs} degrees of freedom exceed the limit {limit}")]
+    TooLarge {
+        /// Which analysis.
+        what: &'static str,
+        /// Degrees of freedom.
+        dofs: usize,
+        /// Limit.
+        limit: usize,
+    },
+    /// An error from the core (a pin outside the rod, ...).
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+/// Error unless `value` is finite and positive.
+pub(crate) fn positive(name: &'static str, value: Real) -> Result<(), IntegratorError> {
+    if value.is_finite() && value > 0.0 {
+        return Ok(());
+    }
+    Err(IntegratorError::InvalidParameter {
+        name,
+        value,
+        reason: "must be finite and positive",
+    })
+}

@@ -1,0 +1,85 @@
+//! # splinerod-integrators
+//!
+//! Time integrators and solvers for a rod with energies and pins, seen through the small
+//! [`System`] view: [`ImplicitEuler`] (an [`Integrator`]), the [`StaticSolver`] for
+//! equilibria, and [`modal::modes`] for natural frequencies. Newton's method
+//! ([`newton`]) and the sparse Cholesky solve ([`linear`]) are shared by all of them.
+//!
+//! Equations of motion, with mass matrix `M`, potential `E` (elastic + gravity),
+//! mass-proportional damping `α` and pins \\(G q = p\\) enforced by multipliers `λ`:
+//!
+//! \\[ M \ddot q = -\nabla E(q) - \alpha M \dot q + G^T \lambda. \\]
+//!
+//! Implicit Euler with step `h` finds \\(v^+\\) minimising the incremental potential
+//! \\(\Phi(v) = \tfrac12 (v - v_0)^T M (v - v_0) + E(q_0 + h v) + \tfrac{h\alpha}{2} v^T M v\\)
+//! subject to \\(G (q_0 + h v) = p\\): Newton on \\(\nabla\Phi = 0\\) with matrix
+//! \\(A = (1 + h\alpha) M + h^2 K\\), `K` the positive semi-definite Hessian.
+//!
+//! ```
+//! use splinerod_integrators::{ImplicitEuler, Integrator, NewtonParams};
+//! let mut euler: Box<dyn Integrator> = Box::new(ImplicitEuler::new(NewtonParams::default())?);
+//! assert_eq!(euler.name(), "implicit-euler");
+//! # Ok::<(), splinerod_integrators::IntegratorError>(())
+//! ```
+#![warn(missing_docs)]
+
+mod error;
+mod implicit_euler;
+mod kkt;
+pub mod linear;
+pub mod modal;
+pub mod newton;
+mod statics;
+
+pub use error::IntegratorError;
+pub use implicit_euler::ImplicitEuler;
+pub use newton::NewtonParams;
+pub use statics::{StaticParams, StaticSolver};
+
+use nalgebra::Vector3;
+use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
+
+/// What an integrator needs of a mechanical system: a rod (state, mass, damping), its
+/// pins and its total potential energy with derivatives.
+///
+/// The facade implements it by summing its energies; tests implement it directly.
+pub trait System: Send + Sync {
+    /// The rod.
+    fn rod(&self) -> &Rod;
+    /// The rod, mutably (integrators write positions and velocities).
+    fn rod_mut(&mut self) -> &mut Rod;
+    /// Pins (their positions are the targets at the end of the step).
+    fn pins(&self) -> &[Pin];
+    /// Total potential energy at the rod's positions, J.
+    fn potential_energy(&self) -> Real;
+    /// Adds the gradient of the potential energy.
+    fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]);
+    /// Adds the Hessian of the potential energy (see [`HessianKind`]).
+    fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded);
+}
+
+/// Counters of one step or solve, for statistics and regression snapshots.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepStats {
+    /// Newton iterations (= numeric factorisations of the Newton matrix).
+    pub newton_iterations: usize,
+    /// Symbolic analyses (only after the basis changed).
+    pub symbolic_analyses: usize,
+    /// Line-search step reductions.
+    pub line_search_cuts: usize,
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Norm of the last residual (constraint forces removed), in the problem's units.
+    pub residual: Real,
+}
+
+/// Advances a [`System`] in time.
+///
+/// Required: [`name`](Integrator::name) and [`step`](Integrator::step). On error the
+/// system is left exactly as before the step.
+pub trait Integrator: Send + Sync {
+    /// Short name, as used in scene files (`"implicit-euler"`).
+    fn name(&self) -> &str;
+    /// Advances `system` by `dt` seconds; pins must already hold their end-of-step targets.
+    fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError>;
+}

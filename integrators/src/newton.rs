@@ -1,0 +1,241 @@
+//! Newton's method with linear equality constraints and a backtracking line search,
+//! shared by every implicit scheme and the static solver.
+//!
+//! A [`NewtonProblem`] is the minimisation of a merit \\(\Phi(x)\\) whose gradient is the
+//! residual `r(x)` and whose (positive definite) Newton matrix is `A(x)`, subject to the
+//! pins \\(G x = c\\). Each iteration assembles `r` and `A`, factorises `A` (numeric
+//! only, unless the basis changed), solves the KKT system by a Schur complement
+//! ([`crate::kkt`]), and takes the step, halving it while the Armijo condition
+//! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails.
+//! It stops when the step moves no material point by more than
+//! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
+
+use crate::kkt::Constraints;
+use crate::linear::SparseCholesky;
+use crate::{IntegratorError, StepStats, System};
+use nalgebra::Vector3;
+use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
+
+/// Settings of Newton's method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonParams {
+    /// Most iterations per solve (≥ 1). Default 10; 1 gives the classic linearised
+    /// ("fast") implicit Euler.
+    pub max_iterations: usize,
+    /// Stop when the largest position change of a step is below
+    /// `tolerance · rest_length`. Default 1e-10.
+    pub tolerance: Real,
+    /// Backtrack on the merit function when a full step does not decrease it. Default on.
+    pub line_search: bool,
+}
+
+impl Default for NewtonParams {
+    fn default() -> Self {
+        Self {
+            max_iterations: 10,
+            tolerance: 1e-10,
+            line_search: true,
+        }
+    }
+}
+
+impl NewtonParams {
+    /// Checks the ranges of the settings.
+    pub fn validate(&self) -> Result<(), IntegratorError> {
+        if self.max_iterations == 0 {
+            return Err(IntegratorError::InvalidParameter {
+                name: "max_iterations",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        crate::error::positive("tolerance", self.tolerance)
+    }
+}
+
+/// A problem Newton's method can drive. The unknown `x` has one 3-vector per control point.
+pub trait NewtonProblem {
+    /// Writes the iterate `x` into the rod (positions and velocities).
+    fn apply(&self, rod: &mut Rod, x: &[Vector3<Real>]);
+    /// Writes the residual \\(r = \nabla\Phi\\) at the applied iterate.
+    fn residual(&mut self, system: &dyn System, r: &mut [Vector3<Real>]);
+    /// Writes the Newton matrix at the applied iterate (symmetric positive definite).
+    fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded);
+    /// The merit \\(\Phi\\) at the applied iterate (used by the line search).
+    fn merit(&mut self, system: &dyn System) -> Real;
+    /// Right-hand side `c` of pin `pin`'s constraint \\(\sum_k b_k x_{first+k} = c\\).
+    fn target(&self, row: &BasisValues, pin: &Pin) -> Vector3<Real>;
+    /// Length moved by a material point per unit of `x` (`h` for velocities, 1 for positions).
+    fn length_per_unknown(&self) -> Real;
+    /// Weight ρ of the augmented Lagrangian term \\(\rho G^T G\\) added to `A` (with
+    /// \\(\rho G^T (c - G x)\\) on the right), which leaves the constrained solution
+    /// unchanged but makes `A` definite where only the pins remove rigid motions. Default 0.
+    fn augmentation(&self) -> Real {
+        0.0
+    }
+    /// Called when `A` is not positive definite; return true after adjusting to retry.
+    fn on_not_positive_definite(&mut self) -> bool {
+        false
+    }
+    /// Whether a step moving material points by at most `step` (m) ends the solve; the
+    /// default compares it with `tolerance` (m).
+    fn converged(&self, step: Real, tolerance: Real) -> bool {
+        step <= tolerance
+    }
+    /// Called after each step with the accepted step length `t ∈ (0, 1]`.
+    fn on_step(&mut self, step_length: Real) {
+        let _ = step_length;
+    }
+}
+
+/// Buffers and factorisation reused across solves (no allocation once sized).
+#[derive(Debug, Default)]
+pub struct NewtonWorkspace {
+    r: Vec<Vector3<Real>>,
+    base: Vec<Vector3<Real>>,
+    dx: Vec<Vector3<Real>>,
+    flat: Vec<Real>,
+    matrix: BlockBanded,
+    solver: SparseCholesky,
+    constraints: Constraints,
+    multipliers: Vec<Vector3<Real>>,
+}
+
+impl NewtonWorkspace {
+    /// Multipliers `μ` of the pins from the last iteration (pin force × `length_per_unknown`
+    /// for dynamics: an impulse; the force itself for statics).
+    pub fn multipliers(&self) -> &[Vector3<Real>] {
+        &self.multipliers
+    }
+
+    fn resize(&mut self, n: usize, pins: usize) {
+        for v in [&mut self.r, &mut self.base, &mut self.dx] {
+            v.resize(n, Vector3::zeros());
+        }
+        self.flat.resize(3 * n, 0.0);
+        self.multipliers.resize(pins, Vector3::zeros());
+    }
+}
+
+/// Runs Newton's method on `problem` from the iterate `x`, leaving the solution in `x` and
+/// applied to the system. On error the system holds some iterate: callers restore it.
+pub fn solve(
+    problem: &mut dyn NewtonProblem,
+    system: &mut dyn System,
+    x: &mut [Vector3<Real>],
+    params: &NewtonParams,
+    ws: &mut NewtonWorkspace,
+) -> Result<StepStats, IntegratorError> {
+    let n = x.len();
+    ws.resize(n, system.pins().len());
+    ws.constraints.setup(system.rod(), system.pins())?;
+    for (p, pin) in system.pins().iter().enumerate() {
+        ws.constraints.targets[p] = problem.target(&ws.constraints.rows()[p], pin);
+    }
+    let tolerance = params.tolerance * system.rod().material().rest_length;
+    let length = problem.length_per_unknown();
+    let mut stats = StepStats::default();
+    problem.apply(system.rod_mut(), x);
+    while stats.newton_iterations < params.max_iterations {
+        stats.newton_iterations += 1;
+        problem.residual(system, &mut ws.r);
+        newton_direction(problem, system, x, ws, &mut stats)?;
+        let t = line_search(problem, system, x, ws, params.line_search, &mut stats)?;
+        problem.on_step(t);
+        let step = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * t * length;
+        if problem.converged(step, tolerance) {
+            stats.converged = true;
+            break;
+        }
+    }
+    Ok(stats)
+}
+
+/// Assembles and factorises `A`, then solves the KKT system into `ws.dx` and the multipliers.
+fn newton_direction(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    x: &[Vector3<Real>],
+    ws: &mut NewtonWorkspace,
+    stats: &mut StepStats,
+) -> Result<(), IntegratorError> {
+    let epoch = system.rod().topology_epoch();
+    let rho = loop {
+        problem.matrix(system, &mut ws.matrix);
+        let rho = problem.augmentation();
+        ws.constraints.add_gram(rho, &mut ws.matrix);
+        match ws.solver.factor(&ws.matrix, epoch) {
+            Ok(symbolic) => {
+                stats.symbolic_analyses += usize::from(symbolic);
+                break rho;
+            }
+            Err(IntegratorError::NotPositiveDefinite { .. })
+                if problem.on_not_positive_definite() => {}
+            Err(e) => return Err(e),
+        }
+    };
+    ws.constraints.factor(&mut ws.solver)?;
+    ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
+    ws.constraints.add_gram_rhs(rho, x, &mut ws.base);
+    for (i, (r, aug)) in ws.r.iter().zip(&ws.base).enumerate() {
+        ws.flat[3 * i..3 * i + 3].copy_from_slice((aug - r).as_slice());
+    }
+    ws.solver.solve_in_place(&mut ws.flat);
+    ws.constraints.correct(x, &mut ws.flat, &mut ws.multipliers);
+    for (i, d) in ws.dx.iter_mut().enumerate() {
+        *d = Vector3::new(ws.flat[3 * i], ws.flat[3 * i + 1], ws.flat[3 * i + 2]);
+    }
+    // Residual with the constraint forces removed: r − Gᵀμ.
+    ws.constraints
+        .add_transpose(&ws.multipliers, -1.0, &mut ws.r);
+    stats.residual = ws.r.iter().map(|v| v.norm_squared()).sum::<Real>().sqrt();
+    if !stats.residual.is_finite() || ws.dx.iter().any(|v| !v.iter().all(|c| c.is_finite())) {
+        return Err(IntegratorError::NonFinite {
+            what: "Newton step",
+        });
+    }
+    Ok(())
+}
+
+/// Takes the step `x += t Δx`, halving `t` until the merit decreases enough. The line
+/// search runs only from a feasible iterate (pins satisfied), where `Δx` is a descent
+/// direction; from an infeasible one the full step restores feasibility first.
+fn line_search(
+    problem: &mut dyn NewtonProblem,
+    system: &mut dyn System,
+    x: &mut [Vector3<Real>],
+    ws: &mut NewtonWorkspace,
+    enabled: bool,
+    stats: &mut StepStats,
+) -> Result<Real, IntegratorError> {
+    // ws.r holds r − Gᵀμ; from a feasible iterate GΔx = 0, so this is r·Δx.
+    let slope: Real = ws.r.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum();
+    let feasible = (0..ws.constraints.len()).all(|p| {
+        let c = ws.constraints.targets[p];
+        (ws.constraints.apply_row(p, x) - c).amax() <= 1e-10 * (1.0 + c.amax())
+    });
+    let search = enabled && feasible && slope < 0.0;
+    let phi0 = if search { problem.merit(system) } else { 0.0 };
+    ws.base.copy_from_slice(x);
+    let mut t: Real = 1.0;
+    loop {
+        for ((xi, b), d) in x.iter_mut().zip(&ws.base).zip(&ws.dx) {
+            *xi = b + d * t;
+        }
+        problem.apply(system.rod_mut(), x);
+        if !search {
+            return Ok(t);
+        }
+        let phi = problem.merit(system);
+        let armijo = phi <= phi0 + 1e-4 * t * slope;
+        let noise = (phi - phi0).abs() <= 1e-14 * phi0.abs();
+        if armijo || noise || t < 1e-8 {
+            if !phi.is_finite() {
+                return Err(IntegratorError::NonFinite { what: "merit" });
+            }
+            return Ok(t);
+        }
+        t *= 0.5;
+        stats.line_search_cuts += 1;
+    }
+}
