@@ -68,7 +68,7 @@ fn tangent(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> Vector3<Real> {
 
 impl Energy for Stretching {
     fn name(&self) -> &str {
-        "stretching"
+        "stretch"
     }
 
     fn energy(&self, rod: &Rod) -> Real {

@@ -1,0 +1,69 @@
+//! # splinerod-adaptivity
+//!
+//! Adaptive resolution (Lenoir et al. 2005, §4): after each integration step, criteria
+//! look at the rod and mark knots to insert (where it bends sharply or is touched) and
+//! knots to remove (where it is straight); the adapt step applies them through the exact
+//! knot maps of `splinerod-core`, so the curve, its motion and every energy are unchanged
+//! by an insertion.
+//!
+//! This crate currently defines the extension point, [`RefinementCriterion`]; the
+//! curvature and interaction criteria and the adapt step build on it.
+//!
+//! ```
+//! use splinerod_adaptivity::{Refinement, RefinementCriterion};
+//! use splinerod_core::{BSplineSpace, Material, Real, Rod};
+//! use nalgebra::Vector3;
+//!
+//! /// Refines wherever something touches the rod.
+//! struct AtInteractions;
+//! impl RefinementCriterion for AtInteractions {
+//!     fn mark(&self, _rod: &Rod, interactions: &[Real], out: &mut Vec<Refinement>) {
+//!         out.extend(interactions.iter().map(|&at| Refinement::Insert { at }));
+//!     }
+//! }
+//!
+//! let material = Material { rest_length: 1.0, linear_density: 0.1 };
+//! let basis = BSplineSpace::clamped_uniform(3, 6, 1.0)?;
+//! let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), Vector3::x())?;
+//! let mut marks = Vec::new();
+//! AtInteractions.mark(&rod, &[0.3], &mut marks);
+//! ().mark(&rod, &[0.3], &mut marks); // the no-op criterion
+//! assert_eq!(marks, vec![Refinement::Insert { at: 0.3 }]);
+//! # Ok::<(), splinerod_core::CoreError>(())
+//! ```
+#![warn(missing_docs)]
+
+use splinerod_core::{Real, Rod};
+
+/// A change of resolution proposed by a criterion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Refinement {
+    /// Insert a knot at material coordinate `at` (rest arclength, m).
+    Insert {
+        /// Where.
+        at: Real,
+    },
+    /// Remove the knot at position `knot` of the knot vector.
+    Remove {
+        /// Index in the knot vector.
+        knot: usize,
+    },
+}
+
+/// Looks at a rod and marks insertions and removals; mutates nothing.
+///
+/// Required: [`mark`](RefinementCriterion::mark). `interactions` lists the material
+/// coordinates where something acts on the rod (pins, grabs, contacts).
+pub trait RefinementCriterion: Send + Sync {
+    /// Name used in reports; the type name by default.
+    fn name(&self) -> &str {
+        std::any::type_name::<Self>()
+    }
+    /// Appends this criterion's proposals to `out`.
+    fn mark(&self, rod: &Rod, interactions: &[Real], out: &mut Vec<Refinement>);
+}
+
+/// The criterion that never proposes anything.
+impl RefinementCriterion for () {
+    fn mark(&self, _rod: &Rod, _interactions: &[Real], _out: &mut Vec<Refinement>) {}
+}

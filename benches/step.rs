@@ -1,0 +1,61 @@
+//! Criterion benchmarks of one implicit Euler step (one Newton iteration, no line
+//! search): stretching, gravity and two end pins, on the hanging cable of the reference
+//! problem, at 16, 1 000, 10 000 and 100 000 control points; and one static Newton solve.
+//!
+//! `cargo bench --bench step` (time per control point = median / n).
+
+// criterion_group! generates undocumented public functions.
+#![allow(missing_docs)]
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use splinerod::prelude::*;
+
+fn hanging_cable(n: usize) -> RodSystem {
+    let material = Material { rest_length: 1.0, linear_density: 0.1 };
+    let basis = BSplineSpace::clamped_uniform(3, n, 1.0).unwrap();
+    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), Vector3::new(0.8, 0.0, 0.0)).unwrap();
+    let pins = [Pin::here(&rod, 0.0).unwrap(), Pin::here(&rod, 1.0).unwrap()];
+    RodSystem::new(rod)
+        .with_energy(Stretching::new(100.0).unwrap())
+        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0)).unwrap())
+        .with_pin(pins[0])
+        .with_pin(pins[1])
+}
+
+fn one_newton_iteration() -> ImplicitEuler {
+    ImplicitEuler::new(NewtonParams { max_iterations: 1, line_search: false, ..NewtonParams::default() }).unwrap()
+}
+
+fn implicit_euler_step(c: &mut Criterion) {
+    let mut group = c.benchmark_group("implicit_euler_step");
+    for n in [16, 1_000, 10_000, 100_000] {
+        let mut system = hanging_cable(n);
+        let mut euler = one_newton_iteration();
+        for _ in 0..20 {
+            euler.step(&mut system, 1e-3).unwrap(); // warm up: falling, symbolic analysis done
+        }
+        group.throughput(Throughput::Elements(n as u64));
+        if n >= 10_000 {
+            group.sample_size(20);
+        }
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| euler.step(&mut system, 1e-3).unwrap())
+        });
+    }
+    group.finish();
+}
+
+fn static_solve(c: &mut Criterion) {
+    let system = hanging_cable(16);
+    let mut solver = StaticSolver::new(StaticParams::default()).unwrap();
+    c.bench_function("static_solve_16", |b| {
+        b.iter_batched_ref(
+            || RodSystem { rod: system.rod.clone(), pins: system.pins.clone(), energies: hanging_cable(16).energies },
+            |s| solver.solve(s).unwrap(),
+            criterion::BatchSize::SmallInput,
+        )
+    });
+}
+
+criterion_group!(benches, implicit_euler_step, static_solve);
+criterion_main!(benches);

@@ -1,0 +1,136 @@
+//! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
+//! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
+
+use crate::scene::{KnotsSpec, Method, Scene};
+use crate::{Error, RodSystem, Simulation};
+use nalgebra::Vector3;
+use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
+use splinerod_energies::{Gravity, Stretching};
+use splinerod_integrators::{ImplicitEuler, NewtonParams, StaticParams};
+
+impl Scene {
+    /// The basis space on `[0, L]` described by `rod.knots`.
+    pub fn basis(&self) -> Result<BSplineSpace, Error> {
+        let r = &self.rod;
+        let wrap = |e: splinerod_core::CoreError| {
+            Error::field("rod.knots", format!("{:?}", r.knots), e.to_string())
+        };
+        match &r.knots {
+            KnotsSpec::Named(name) if name == "uniform" => {
+                BSplineSpace::uniform(r.degree, r.control_points, r.rest_length).map_err(wrap)
+            }
+            KnotsSpec::Named(_) => {
+                BSplineSpace::clamped_uniform(r.degree, r.control_points, r.rest_length)
+                    .map_err(wrap)
+            }
+            KnotsSpec::Explicit(raw) => {
+                // Check the user's numbers first, so errors quote them; then map the domain to [0, L].
+                let given = BSplineSpace::new(r.degree, raw.clone()).map_err(wrap)?;
+                let (a, b) = given.domain();
+                let mapped = raw
+                    .iter()
+                    .map(|t| (t - a) / (b - a) * r.rest_length)
+                    .collect();
+                BSplineSpace::new(r.degree, mapped).map_err(wrap)
+            }
+        }
+    }
+
+    /// The rod in its initial state.
+    pub fn build_rod(&self) -> Result<Rod, Error> {
+        let r = &self.rod;
+        let material = Material {
+            rest_length: r.rest_length,
+            linear_density: r.linear_density,
+        };
+        let basis = Box::new(self.basis()?);
+        let mut rod = match &r.initial_control_points {
+            Some(points) => Rod::new(
+                material,
+                basis,
+                points.iter().map(|p| Vector3::from(*p)).collect(),
+            )?,
+            None => {
+                let start = Vector3::from(r.start.unwrap_or([0.0; 3]));
+                let end = r
+                    .end
+                    .map(Vector3::from)
+                    .unwrap_or(start + Vector3::new(r.rest_length, 0.0, 0.0));
+                Rod::straight(material, basis, start, end)?
+            }
+        };
+        rod.damping = r.damping;
+        Ok(rod)
+    }
+
+    /// The rod with its energies and pins.
+    pub fn build_system(&self) -> Result<RodSystem, Error> {
+        let rod = self.build_rod()?;
+        let l = rod.material().rest_length;
+        let mut system =
+            RodSystem::new(rod).with_energy(Stretching::new(self.rod.stretch_stiffness)?);
+        let g = Vector3::from(self.world.gravity);
+        if g != Vector3::zeros() {
+            system = system.with_energy(Gravity::new(g)?);
+        }
+        for (i, spec) in self.pins.iter().enumerate() {
+            let pin = Pin::here(&system.rod, spec.at * l)?;
+            if let Some(p) = spec.position {
+                let gap = (Vector3::from(p) - pin.position).norm();
+                if gap > 1e-9 * l.max(1.0) {
+                    let reason = format!(
+                        "the rod starts at {:?} there ({gap:.3e} m away); pins must agree with the initial shape",
+                        pin.position.as_slice()
+                    );
+                    return Err(Error::field(
+                        format!("pins[{i}].position"),
+                        format!("{p:?}"),
+                        reason,
+                    ));
+                }
+            }
+            system = system.with_pin(pin);
+        }
+        Ok(system)
+    }
+
+    /// Newton settings of `[solver]` for time stepping.
+    pub fn newton_params(&self) -> NewtonParams {
+        let d = NewtonParams::default();
+        NewtonParams {
+            max_iterations: self.solver.newton_iterations.unwrap_or(d.max_iterations),
+            tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
+            line_search: self.solver.line_search,
+        }
+    }
+
+    /// Settings of `[solver]` for `method = "static"`.
+    pub fn static_params(&self) -> StaticParams {
+        let d = StaticParams::default();
+        StaticParams {
+            max_iterations: self.solver.newton_iterations.unwrap_or(d.max_iterations),
+            tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
+        }
+    }
+
+    /// A time-stepping simulation of the scene (implicit Euler).
+    pub fn build(&self) -> Result<Simulation, Error> {
+        let integrator = Box::new(ImplicitEuler::new(self.newton_params())?);
+        Ok(Simulation::new(self.build_system()?, integrator))
+    }
+
+    /// Number of steps of `dt` covering `duration` (the last step ends at or just past it).
+    pub fn step_count(&self) -> usize {
+        match (self.solver.method, self.solver.dt, self.solver.duration) {
+            (Method::ImplicitEuler, Some(dt), Some(t)) => {
+                ((t / dt) * (1.0 - 1e-12)).ceil().max(1.0) as usize
+            }
+            _ => 0,
+        }
+    }
+
+    /// Material coordinate (m) of a scene fraction.
+    pub fn material_coordinate(&self, fraction: Real) -> Real {
+        fraction * self.rod.rest_length
+    }
+}

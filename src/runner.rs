@@ -1,0 +1,198 @@
+//! Running a scene to its end and collecting the result that `splinerod run` prints and
+//! writes as JSON.
+
+use crate::scene::{Method, Scene};
+use crate::{Error, RodSystem};
+use nalgebra::Vector3;
+use serde::Serialize;
+use splinerod_core::Real;
+use splinerod_integrators::StaticSolver;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Positions of evenly spaced material points at the end.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Samples {
+    /// Material coordinates, fractions of the rest length.
+    pub s: Vec<Real>,
+    /// Their positions, m.
+    pub positions: Vec<[Real; 3]>,
+}
+
+/// The trajectory of one material point.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Probe {
+    /// Material coordinate, fraction of the rest length.
+    pub s: Real,
+    /// Times, s (the initial state first).
+    pub t: Vec<Real>,
+    /// Positions at those times, m.
+    pub positions: Vec<[Real; 3]>,
+}
+
+/// Solver counters summed over the run.
+#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+pub struct SolverTotals {
+    /// Newton iterations (numeric factorisations).
+    pub newton_iterations: usize,
+    /// Symbolic analyses.
+    pub symbolic_analyses: usize,
+    /// Line-search step reductions.
+    pub line_search_cuts: usize,
+    /// Steps whose Newton iterations did not reach the tolerance.
+    pub unconverged_steps: usize,
+}
+
+/// Everything `splinerod run` reports.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RunResult {
+    /// Simulated time at the end, s.
+    pub time: Real,
+    /// Time steps taken (0 for a static solve).
+    pub steps: usize,
+    /// Control points at the end.
+    pub control_points: usize,
+    /// Wall time of the solve, s.
+    pub wall_seconds: Real,
+    /// End positions of evenly spaced material points.
+    pub samples: Samples,
+    /// Trajectories of the probed material points.
+    pub probes: Vec<Probe>,
+    /// Final energies, J: `kinetic` and one entry per energy term (`stretch`, `gravity`).
+    pub energy: BTreeMap<String, Real>,
+    /// Final knot vector, fractions of the rest length.
+    pub knots: Vec<Real>,
+    /// Solver counters.
+    pub solver: SolverTotals,
+    /// Forces the pins exert on the rod at the end, N.
+    pub pin_forces: Vec<[Real; 3]>,
+}
+
+/// Runs `scene` to its end.
+pub fn run(scene: &Scene) -> Result<RunResult, Error> {
+    match scene.solver.method {
+        Method::Static => run_static(scene),
+        Method::ImplicitEuler => run_dynamic(scene),
+    }
+}
+
+fn run_static(scene: &Scene) -> Result<RunResult, Error> {
+    let mut system = scene.build_system()?;
+    let mut solver = StaticSolver::new(scene.static_params())?;
+    let start = Instant::now();
+    let stats = solver.solve(&mut system)?;
+    let wall = start.elapsed().as_secs_f64();
+    let totals = SolverTotals {
+        newton_iterations: stats.newton_iterations,
+        symbolic_analyses: stats.symbolic_analyses,
+        line_search_cuts: stats.line_search_cuts,
+        unconverged_steps: 0,
+    };
+    let forces = solver.pin_forces().to_vec();
+    let probes = probes_at_start(scene, &system)?;
+    finish(scene, &system, (0.0, 0, wall), totals, probes, &forces)
+}
+
+fn run_dynamic(scene: &Scene) -> Result<RunResult, Error> {
+    let mut sim = scene.build()?;
+    let dt = scene.solver.dt.unwrap_or_default();
+    let mut probes = probes_at_start(scene, &sim.system)?;
+    let mut totals = SolverTotals::default();
+    let start = Instant::now();
+    for _ in 0..scene.step_count() {
+        let report = sim.step(dt)?;
+        totals.newton_iterations += report.solver.newton_iterations;
+        totals.symbolic_analyses += report.solver.symbolic_analyses;
+        totals.line_search_cuts += report.solver.line_search_cuts;
+        totals.unconverged_steps += usize::from(!report.solver.converged);
+        for probe in &mut probes {
+            probe.t.push(sim.time);
+            let p = sim.system.rod.point(scene.material_coordinate(probe.s))?;
+            probe.positions.push(p.into());
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    finish(
+        scene,
+        &sim.system,
+        (sim.time, sim.steps, wall),
+        totals,
+        probes,
+        &[],
+    )
+}
+
+fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
+    scene
+        .output
+        .probes
+        .iter()
+        .map(|&s| {
+            let p = system.rod.point(scene.material_coordinate(s))?;
+            Ok(Probe {
+                s,
+                t: vec![0.0],
+                positions: vec![p.into()],
+            })
+        })
+        .collect()
+}
+
+fn finish(
+    scene: &Scene,
+    system: &RodSystem,
+    (time, steps, wall_seconds): (Real, usize, Real),
+    solver: SolverTotals,
+    probes: Vec<Probe>,
+    pin_forces: &[Vector3<Real>],
+) -> Result<RunResult, Error> {
+    let rod = &system.rod;
+    let m = scene.output.samples;
+    let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
+    let positions = s
+        .iter()
+        .map(|&f| rod.point(scene.material_coordinate(f)).map(Into::into))
+        .collect::<Result<_, _>>()?;
+    let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
+    energy.extend(system.energy_breakdown());
+    let l = rod.material().rest_length;
+    Ok(RunResult {
+        time,
+        steps,
+        control_points: rod.len(),
+        wall_seconds,
+        samples: Samples { s, positions },
+        probes,
+        energy,
+        knots: rod.basis().knots().iter().map(|k| k / l).collect(),
+        solver,
+        pin_forces: pin_forces.iter().map(|f| (*f).into()).collect(),
+    })
+}
+
+impl RunResult {
+    /// A short human summary: steps, control points, wall time, final energies.
+    pub fn summary(&self) -> String {
+        let mut out = format!(
+            "{} steps to t = {:.4} s, {} control points, {:.3} s wall ({} Newton iterations)\n",
+            self.steps,
+            self.time,
+            self.control_points,
+            self.wall_seconds,
+            self.solver.newton_iterations
+        );
+        let energies: Vec<String> = self
+            .energy
+            .iter()
+            .map(|(k, v)| format!("{k} {v:.6e}"))
+            .collect();
+        out.push_str(&format!("energy (J): {}\n", energies.join(", ")));
+        if self.solver.unconverged_steps > 0 {
+            out.push_str(&format!(
+                "note: {} steps stopped at the Newton iteration limit\n",
+                self.solver.unconverged_steps
+            ));
+        }
+        out
+    }
+}

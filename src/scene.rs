@@ -1,0 +1,361 @@
+//! TOML scenes: the format (every field documented in `scenes/README.md`) and its
+//! validation. Material coordinates in scenes are fractions of the rest length in
+//! `[0, 1]`; the library works in rest arclength (m).
+//!
+//! Unknown fields are rejected, missing ones named by the parser, and every value is
+//! range-checked by [`Scene::validate`], which names the field in its error.
+
+use crate::Error;
+use serde::Deserialize;
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// The rod.
+    pub rod: RodSpec,
+    /// Pinned material points.
+    #[serde(default)]
+    pub pins: Vec<PinSpec>,
+    /// Gravity.
+    #[serde(default)]
+    pub world: WorldSpec,
+    /// How to solve.
+    pub solver: SolverSpec,
+    /// What to report.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// `[rod]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RodSpec {
+    /// Rest length `L`, m (> 0).
+    pub rest_length: f64,
+    /// Mass per unit rest length, kg/m (> 0).
+    pub linear_density: f64,
+    /// Axial stiffness `EA = Y·r`, N (> 0).
+    pub stretch_stiffness: f64,
+    /// Mass-proportional damping, 1/s (≥ 0). Default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Number of control points (≥ degree + 1).
+    pub control_points: usize,
+    /// Polynomial degree, 1 to 9. Default 3.
+    #[serde(default = "default_degree")]
+    pub degree: usize,
+    /// `"clamped"` (default), `"uniform"`, or an explicit non-decreasing knot vector of
+    /// `control_points + degree + 1` values (any units; the domain is mapped to `[0, L]`).
+    #[serde(default)]
+    pub knots: KnotsSpec,
+    /// Start of the initial straight shape, m. Default the origin.
+    pub start: Option<[f64; 3]>,
+    /// End of the initial straight shape, m. Default `start + (L, 0, 0)`.
+    pub end: Option<[f64; 3]>,
+    /// Explicit initial control points (instead of `start`/`end`), m.
+    pub initial_control_points: Option<Vec<[f64; 3]>>,
+}
+
+fn default_degree() -> usize {
+    3
+}
+
+/// `rod.knots`: a named layout or an explicit vector.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum KnotsSpec {
+    /// `"clamped"` or `"uniform"`.
+    Named(String),
+    /// Explicit knot values.
+    Explicit(Vec<f64>),
+}
+
+impl Default for KnotsSpec {
+    fn default() -> Self {
+        Self::Named("clamped".into())
+    }
+}
+
+/// `[[pins]]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PinSpec {
+    /// Material coordinate, fraction of the rest length in `[0, 1]`.
+    pub at: f64,
+    /// Held position, m. Default: where the point starts; if given it must agree with the
+    /// initial shape (a pin never makes the rod jump).
+    pub position: Option<[f64; 3]>,
+}
+
+/// `[world]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSpec {
+    /// Gravity, m/s². Default `[0, -9.81, 0]`.
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -9.81, 0.0]
+}
+
+impl Default for WorldSpec {
+    fn default() -> Self {
+        Self {
+            gravity: default_gravity(),
+        }
+    }
+}
+
+/// `solver.method`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Implicit Euler time stepping.
+    ImplicitEuler,
+    /// Static equilibrium (no time).
+    Static,
+}
+
+/// `[solver]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// `"implicit-euler"` or `"static"`.
+    pub method: Method,
+    /// Time step, s (> 0; required for time stepping).
+    pub dt: Option<f64>,
+    /// Simulated duration, s (> 0; required for time stepping).
+    pub duration: Option<f64>,
+    /// Most Newton iterations per step (≥ 1). Default 10 (200 for `static`).
+    pub newton_iterations: Option<usize>,
+    /// Newton tolerance on the step, relative to the rest length (> 0). Default 1e-10
+    /// (1e-12 for `static`).
+    pub tolerance: Option<f64>,
+    /// Line search on the incremental potential. Default true.
+    #[serde(default = "default_true")]
+    pub line_search: bool,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Material points reported at the end, evenly spaced in `[0, 1]` (≥ 2). Default 41.
+    #[serde(default = "default_samples")]
+    pub samples: usize,
+    /// Material points (fractions in `[0, 1]`) whose positions are recorded every step.
+    #[serde(default)]
+    pub probes: Vec<f64>,
+}
+
+fn default_samples() -> usize {
+    41
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            samples: default_samples(),
+            probes: Vec::new(),
+        }
+    }
+}
+
+impl Scene {
+    /// Parses and validates a scene from TOML text.
+    pub fn from_toml(text: &str) -> Result<Self, Error> {
+        let scene: Scene =
+            toml::from_str(text).map_err(|e| Error::Scene(e.to_string().trim_end().to_string()))?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates a scene file.
+    pub fn load(path: impl AsRef<std::path::Path>) -> Result<Self, Error> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::from_toml(&text).map_err(|e| match e {
+            Error::Scene(m) => Error::Scene(format!("{}: {m}", path.display())),
+            other => other,
+        })
+    }
+
+    /// Range checks of every value; the error names the field.
+    pub fn validate(&self) -> Result<(), Error> {
+        let r = &self.rod;
+        positive("rod.rest_length", r.rest_length)?;
+        positive("rod.linear_density", r.linear_density)?;
+        positive("rod.stretch_stiffness", r.stretch_stiffness)?;
+        non_negative("rod.damping", r.damping)?;
+        if !(1..=splinerod_core::MAX_DEGREE).contains(&r.degree) {
+            return Err(Error::field(
+                "rod.degree",
+                r.degree,
+                format!("must be 1 to {}", splinerod_core::MAX_DEGREE),
+            ));
+        }
+        if r.control_points < r.degree + 1 {
+            let reason = format!(
+                "a degree-{} rod needs at least {} control points",
+                r.degree,
+                r.degree + 1
+            );
+            return Err(Error::field("rod.control_points", r.control_points, reason));
+        }
+        self.validate_shape()?;
+        for (i, pin) in self.pins.iter().enumerate() {
+            fraction(&format!("pins[{i}].at"), pin.at)?;
+            if let Some(p) = pin.position {
+                finite_vec(&format!("pins[{i}].position"), p)?;
+            }
+        }
+        finite_vec("world.gravity", self.world.gravity)?;
+        self.validate_solver()?;
+        if self.output.samples < 2 {
+            return Err(Error::field(
+                "output.samples",
+                self.output.samples,
+                "must be at least 2",
+            ));
+        }
+        for (i, &p) in self.output.probes.iter().enumerate() {
+            fraction(&format!("output.probes[{i}]"), p)?;
+        }
+        Ok(())
+    }
+
+    fn validate_shape(&self) -> Result<(), Error> {
+        let r = &self.rod;
+        match &r.knots {
+            KnotsSpec::Named(name) if name == "clamped" || name == "uniform" => {}
+            KnotsSpec::Named(name) => {
+                return Err(Error::field(
+                    "rod.knots",
+                    format!("\"{name}\""),
+                    "must be \"clamped\", \"uniform\" or a list of knots",
+                ))
+            }
+            KnotsSpec::Explicit(k) => {
+                let expected = r.control_points + r.degree + 1;
+                if k.len() != expected {
+                    let reason = format!("needs control_points + degree + 1 = {expected} values");
+                    return Err(Error::field(
+                        "rod.knots",
+                        format!("{} values", k.len()),
+                        reason,
+                    ));
+                }
+            }
+        }
+        if let Some(points) = &r.initial_control_points {
+            if r.start.is_some() || r.end.is_some() {
+                return Err(Error::field(
+                    "rod.initial_control_points",
+                    "given",
+                    "give either start/end or initial_control_points, not both",
+                ));
+            }
+            if points.len() != r.control_points {
+                let reason = format!("must list rod.control_points = {} points", r.control_points);
+                return Err(Error::field(
+                    "rod.initial_control_points",
+                    format!("{} points", points.len()),
+                    reason,
+                ));
+            }
+            for (i, p) in points.iter().enumerate() {
+                finite_vec(&format!("rod.initial_control_points[{i}]"), *p)?;
+            }
+        }
+        if let Some(s) = r.start {
+            finite_vec("rod.start", s)?;
+        }
+        if let Some(e) = r.end {
+            finite_vec("rod.end", e)?;
+        }
+        Ok(())
+    }
+
+    fn validate_solver(&self) -> Result<(), Error> {
+        let s = &self.solver;
+        if s.method == Method::ImplicitEuler {
+            positive(
+                "solver.dt",
+                s.dt.ok_or_else(|| {
+                    Error::field("solver.dt", "missing", "time stepping needs a time step")
+                })?,
+            )?;
+            let duration = s.duration.ok_or_else(|| {
+                Error::field(
+                    "solver.duration",
+                    "missing",
+                    "time stepping needs a duration",
+                )
+            })?;
+            positive("solver.duration", duration)?;
+        } else {
+            for (name, value) in [("solver.dt", s.dt), ("solver.duration", s.duration)] {
+                if let Some(v) = value {
+                    positive(name, v)?;
+                }
+            }
+        }
+        if s.newton_iterations == Some(0) {
+            return Err(Error::field(
+                "solver.newton_iterations",
+                0,
+                "must be at least 1",
+            ));
+        }
+        if let Some(t) = s.tolerance {
+            positive("solver.tolerance", t)?;
+        }
+        Ok(())
+    }
+}
+
+fn positive(field: &str, v: f64) -> Result<(), Error> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::field(field, v, "must be finite and positive"))
+    }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<(), Error> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::field(field, v, "must be finite and non-negative"))
+    }
+}
+
+fn fraction(field: &str, v: f64) -> Result<(), Error> {
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(Error::field(
+            field,
+            v,
+            "must be a fraction of the rest length in [0, 1]",
+        ))
+    }
+}
+
+fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::field(field, format!("{v:?}"), "must be finite"))
+    }
+}
