@@ -149,6 +149,11 @@ impl BlockBanded {
         &self.blocks[i * (self.bandwidth + 1) + k]
     }
 
+    /// Whether every stored entry is finite.
+    pub fn is_finite(&self) -> bool {
+        self.blocks.iter().all(|b| b.iter().all(|x| x.is_finite()))
+    }
+
     /// Adds `b` at `(i, j)` and `bᵀ` at `(j, i)`; for `i == j`, `b` should be symmetric.
     #[track_caller]
     #[inline]

@@ -47,6 +47,7 @@ struct EulerProblem<'a> {
     h: Real,
     alpha: Real,
     scratch: &'a mut [Vector3<Real>],
+    hessian: HessianKind,
 }
 
 impl NewtonProblem for EulerProblem<'_> {
@@ -74,7 +75,7 @@ impl NewtonProblem for EulerProblem<'_> {
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
         let rod = system.rod();
         a.reset(rod.len(), rod.basis().degree());
-        system.add_potential_hessian(HessianKind::Definite, a);
+        system.add_potential_hessian(self.hessian, a);
         a.scale(self.h * self.h);
         a.add_scaled_scalar(1.0 + self.h * self.alpha, rod.mass_matrix());
     }
@@ -102,6 +103,12 @@ impl NewtonProblem for EulerProblem<'_> {
 
     fn length_per_unknown(&self) -> Real {
         self.h
+    }
+
+    fn on_not_positive_definite(&mut self) -> bool {
+        let retry = self.hessian == HessianKind::Exact;
+        self.hessian = HessianKind::Definite;
+        retry
     }
 }
 
@@ -136,6 +143,7 @@ impl Integrator for ImplicitEuler {
             h: dt,
             alpha,
             scratch: &mut self.scratch,
+            hessian: HessianKind::Exact,
         };
         let result = newton::solve(
             &mut problem,

@@ -169,6 +169,11 @@ fn newton_direction(
                 stats.symbolic_analyses += usize::from(symbolic);
                 break rho;
             }
+            Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
+                return Err(IntegratorError::NonFinite {
+                    what: "Newton matrix",
+                })
+            }
             Err(IntegratorError::NotPositiveDefinite { .. })
                 if problem.on_not_positive_definite() => {}
             Err(e) => return Err(e),
