@@ -1,0 +1,63 @@
+//! The elastic catenary against `tests/data/catenary_L1_D0.8_mu0.1_EA100.json`:
+//! material-point positions after a static solve, the convergence order of the cubic
+//! Galerkin discretisation, and the same equilibrium reached by damped time stepping.
+
+mod common;
+
+use common::{catenary_reference, catenary_scene, max_error};
+use splinerod::{run, Real};
+
+fn static_error(n: usize) -> Real {
+    let scene = catenary_scene(n, 0.0, r#"method = "static""#);
+    let result = run(&scene).expect("static solve");
+    let (s, xy) = catenary_reference();
+    assert_eq!(result.samples.s.len(), s.len());
+    for (a, b) in result.samples.s.iter().zip(&s) {
+        assert!((a - b).abs() < 1e-14, "sample {a} vs reference {b}");
+    }
+    max_error(&result.samples.positions, &xy)
+}
+
+#[test]
+fn static_catenary_matches_reference() {
+    let e16 = static_error(16);
+    let e32 = static_error(32);
+    println!("max error: 16 cps {e16:.3e} m, 32 cps {e32:.3e} m");
+    assert!(e16 <= 5e-5, "16 control points: {e16:.3e} m");
+    assert!(e32 <= 2e-6, "32 control points: {e32:.3e} m");
+}
+
+#[test]
+fn static_catenary_converges_at_least_at_fourth_order() {
+    // Knot spacing h = L / (n - d) for clamped uniform cubic knots.
+    let (n1, n2) = (12, 24);
+    let (e1, e2) = (static_error(n1), static_error(n2));
+    let h = |n: usize| 1.0 / (n - 3) as Real;
+    let order = (e1 / e2).ln() / (h(n1) / h(n2)).ln();
+    println!("errors {e1:.3e} -> {e2:.3e}, observed order {order:.2}");
+    assert!(order >= 4.0, "observed order {order:.2}");
+}
+
+#[test]
+fn damped_dynamics_settles_on_the_static_equilibrium() {
+    let n = 16;
+    let statics = run(&catenary_scene(n, 0.0, r#"method = "static""#)).expect("static");
+    let solver = "method = \"implicit-euler\"\ndt = 0.01\nduration = 6.0";
+    let dynamic = run(&catenary_scene(n, 4.0, solver)).expect("dynamic");
+    let gap = statics
+        .samples
+        .positions
+        .iter()
+        .zip(&dynamic.samples.positions)
+        .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<Real>().sqrt())
+        .fold(0.0, Real::max);
+    println!(
+        "dynamic vs static: {gap:.3e} m after {} steps ({} of them, in compression, \
+         stopped at the Newton iteration limit), kinetic {:.3e} J",
+        dynamic.steps, dynamic.solver.unconverged_steps, dynamic.energy["kinetic"]
+    );
+    // The straight start is compressed (γ = 0.8), where the Newton matrix drops the
+    // negative curvature and converges linearly; the fixed point is unaffected.
+    assert!(dynamic.energy["kinetic"] < 1e-12, "not at rest");
+    assert!(gap <= 1e-5, "dynamic equilibrium differs by {gap:.3e} m");
+}

@@ -1,0 +1,90 @@
+//! Failure handling at the facade: a step that produces non-finite values fails with an
+//! error and leaves the simulation exactly as it was; the public types can cross threads
+//! (ensembles run rods on rayon's pool).
+
+use splinerod::prelude::*;
+
+/// An energy whose gradient turns NaN once the rod's midpoint sags below `depth`:
+/// stands for any user energy that breaks down in some configuration.
+struct BreaksBelow {
+    depth: Real,
+}
+
+impl Energy for BreaksBelow {
+    fn energy(&self, _rod: &Rod) -> Real {
+        0.0
+    }
+    fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        let mid = rod.len() / 2;
+        if rod.positions[mid].y < -self.depth {
+            gradient[mid].y += Real::NAN;
+        }
+    }
+}
+
+fn hanging_cable(poison_depth: Real) -> Simulation {
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, 12, 1.0).expect("basis");
+    let end = Vector3::new(0.8, 0.0, 0.0);
+    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
+    let pins = [
+        Pin::here(&rod, 0.0).expect("pin"),
+        Pin::here(&rod, 1.0).expect("pin"),
+    ];
+    let system = RodSystem::new(rod)
+        .with_energy(Stretching::new(100.0).expect("stiffness"))
+        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0)).expect("gravity"))
+        .with_energy(BreaksBelow {
+            depth: poison_depth,
+        })
+        .with_pin(pins[0])
+        .with_pin(pins[1]);
+    let euler = ImplicitEuler::new(NewtonParams::default()).expect("params");
+    Simulation::new(system, Box::new(euler))
+}
+
+#[test]
+fn non_finite_step_fails_and_leaves_the_state_unchanged() {
+    let mut sim = hanging_cable(0.01);
+    let mut failure = None;
+    for _ in 0..200 {
+        let (positions, velocities) = (
+            sim.system.rod.positions.clone(),
+            sim.system.rod.velocities.clone(),
+        );
+        let (time, steps) = (sim.time, sim.steps);
+        match sim.step(1e-3) {
+            Ok(_) => continue,
+            Err(e) => {
+                assert_eq!(sim.system.rod.positions, positions, "positions changed");
+                assert_eq!(sim.system.rod.velocities, velocities, "velocities changed");
+                assert_eq!((sim.time, sim.steps), (time, steps), "clock advanced");
+                failure = Some(e);
+                break;
+            }
+        }
+    }
+    let error = failure.expect("the midpoint sags past 1 cm within 0.2 s");
+    println!("{error}");
+    assert!(error.to_string().contains("non-finite"), "{error}");
+    // Retrying from the restored state fails the same way, and the rod stays finite.
+    assert!(sim.step(1e-3).is_err());
+    assert!(sim.system.rod.check_finite().is_ok());
+}
+
+#[test]
+fn public_types_are_send_and_sync() {
+    fn check<T: Send + Sync>() {}
+    check::<Rod>();
+    check::<RodSystem>();
+    check::<Simulation>();
+    check::<Scene>();
+    check::<splinerod::RunResult>();
+    check::<splinerod::Error>();
+    check::<Box<dyn Energy>>();
+    check::<Box<dyn Integrator>>();
+    check::<Box<dyn BasisSpace>>();
+}
