@@ -39,6 +39,10 @@ pub enum IntegratorError {
         /// Final residual norm.
         residual: Real,
     },
+    /// A solve was asked of the linear solver before a successful factorisation, or with
+    /// a right-hand side of the wrong length.
+    #[error("linear solver misuse: {0}")]
+    SolverState(&'static str),
     /// A dense analysis was asked of a system too large for it.
     #[error("{what} needs a dense matrix: {dofs} degrees of freedom exceed the limit {limit}")]
     TooLarge {

@@ -110,7 +110,7 @@ impl Constraints {
                 }
             }
         }
-        solver.solve_in_place(&mut self.y);
+        solver.solve_in_place(&mut self.y)?;
         self.schur.clear();
         self.schur.resize(m * m, 0.0);
         for i in 0..m {

@@ -31,6 +31,7 @@ pub struct SparseCholesky {
     memory: Option<MemBuffer>,
     rhs_capacity: usize,
     factored: bool,
+    analyses: usize,
 }
 
 impl std::fmt::Debug for SparseCholesky {
@@ -100,7 +101,13 @@ impl SparseCholesky {
         Ok(analysed)
     }
 
+    /// Symbolic analyses run so far (one per basis change, ideally).
+    pub fn analyses(&self) -> usize {
+        self.analyses
+    }
+
     fn analyse(&mut self, n: usize, bw: usize) -> Result<(), IntegratorError> {
+        self.analyses += 1;
         let dofs = 3 * n;
         let pattern = upper_band_pattern(dofs, bw);
         let params = CholeskySymbolicParams {
@@ -165,17 +172,18 @@ impl SparseCholesky {
     }
 
     /// Solves `A x = b` in place for `k = rhs.len() / (3n)` right-hand sides stored
-    /// column after column.
-    #[track_caller]
-    pub fn solve_in_place(&mut self, rhs: &mut [Real]) {
+    /// column after column. Errors if no factorisation succeeded since the last
+    /// [`factor`](Self::factor) call or if the length is not a multiple of `3n`.
+    pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
         let n = match (&self.symbolic, self.factored) {
             (Some(symbolic), true) => symbolic.nrows(),
-            _ => panic!("solve_in_place needs a successful factor() first"),
+            _ => return Err(IntegratorError::SolverState("solve before a successful factor")),
         };
-        assert!(
-            n > 0 && rhs.len() % n == 0,
-            "right-hand side length must be a multiple of 3n"
-        );
+        if n == 0 || rhs.len() % n != 0 {
+            return Err(IntegratorError::SolverState(
+                "right-hand side length is not a multiple of 3n",
+            ));
+        }
         let k = rhs.len() / n;
         self.reserve_rhs(k);
         if let (Some(symbolic), Some(memory)) = (&self.symbolic, &mut self.memory) {
@@ -187,5 +195,6 @@ impl SparseCholesky {
                 MemStack::new(memory),
             );
         }
+        Ok(())
     }
 }

@@ -160,15 +160,13 @@ fn newton_direction(
     stats: &mut StepStats,
 ) -> Result<(), IntegratorError> {
     let epoch = system.rod().topology_epoch();
+    let analyses = ws.solver.analyses();
     let rho = loop {
         problem.matrix(system, &mut ws.matrix);
         let rho = problem.augmentation();
         ws.constraints.add_gram(rho, &mut ws.matrix);
         match ws.solver.factor(&ws.matrix, epoch) {
-            Ok(symbolic) => {
-                stats.symbolic_analyses += usize::from(symbolic);
-                break rho;
-            }
+            Ok(_) => break rho,
             Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
                 return Err(IntegratorError::NonFinite {
                     what: "Newton matrix",
@@ -179,13 +177,14 @@ fn newton_direction(
             Err(e) => return Err(e),
         }
     };
+    stats.symbolic_analyses += ws.solver.analyses() - analyses;
     ws.constraints.factor(&mut ws.solver)?;
     ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
     ws.constraints.add_gram_rhs(rho, x, &mut ws.base);
     for (i, (r, aug)) in ws.r.iter().zip(&ws.base).enumerate() {
         ws.flat[3 * i..3 * i + 3].copy_from_slice((aug - r).as_slice());
     }
-    ws.solver.solve_in_place(&mut ws.flat);
+    ws.solver.solve_in_place(&mut ws.flat)?;
     ws.constraints.correct(x, &mut ws.flat, &mut ws.multipliers);
     for (i, d) in ws.dx.iter_mut().enumerate() {
         *d = Vector3::new(ws.flat[3 * i], ws.flat[3 * i + 1], ws.flat[3 * i + 2]);
