@@ -11,9 +11,18 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use splinerod::prelude::*;
 
 fn hanging_cable(n: usize) -> RodSystem {
-    let material = Material { rest_length: 1.0, linear_density: 0.1 };
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
     let basis = BSplineSpace::clamped_uniform(3, n, 1.0).unwrap();
-    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), Vector3::new(0.8, 0.0, 0.0)).unwrap();
+    let rod = Rod::straight(
+        material,
+        Box::new(basis),
+        Vector3::zeros(),
+        Vector3::new(0.8, 0.0, 0.0),
+    )
+    .unwrap();
     let pins = [Pin::here(&rod, 0.0).unwrap(), Pin::here(&rod, 1.0).unwrap()];
     RodSystem::new(rod)
         .with_energy(Stretching::new(100.0).unwrap())
@@ -23,7 +32,12 @@ fn hanging_cable(n: usize) -> RodSystem {
 }
 
 fn one_newton_iteration() -> ImplicitEuler {
-    ImplicitEuler::new(NewtonParams { max_iterations: 1, line_search: false, ..NewtonParams::default() }).unwrap()
+    ImplicitEuler::new(NewtonParams {
+        max_iterations: 1,
+        line_search: false,
+        ..NewtonParams::default()
+    })
+    .unwrap()
 }
 
 fn implicit_euler_step(c: &mut Criterion) {
@@ -50,7 +64,11 @@ fn static_solve(c: &mut Criterion) {
     let mut solver = StaticSolver::new(StaticParams::default()).unwrap();
     c.bench_function("static_solve_16", |b| {
         b.iter_batched_ref(
-            || RodSystem { rod: system.rod.clone(), pins: system.pins.clone(), energies: hanging_cable(16).energies },
+            || RodSystem {
+                rod: system.rod.clone(),
+                pins: system.pins.clone(),
+                energies: hanging_cable(16).energies,
+            },
             |s| solver.solve(s).unwrap(),
             criterion::BatchSize::SmallInput,
         )

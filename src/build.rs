@@ -12,9 +12,11 @@ impl Scene {
     /// The basis space on `[0, L]` described by `rod.knots`.
     pub fn basis(&self) -> Result<BSplineSpace, Error> {
         let r = &self.rod;
-        let wrap = |e: splinerod_core::CoreError| {
-            Error::field("rod.knots", format!("{:?}", r.knots), e.to_string())
+        let given = match &r.knots {
+            KnotsSpec::Named(name) => format!("\"{name}\""),
+            KnotsSpec::Explicit(k) => format!("{k:?}"),
         };
+        let wrap = |e: splinerod_core::CoreError| Error::field("rod.knots", &given, e.to_string());
         match &r.knots {
             KnotsSpec::Named(name) if name == "uniform" => {
                 BSplineSpace::uniform(r.degree, r.control_points, r.rest_length).map_err(wrap)

@@ -171,8 +171,7 @@ impl Default for OutputSpec {
 impl Scene {
     /// Parses and validates a scene from TOML text.
     pub fn from_toml(text: &str) -> Result<Self, Error> {
-        let scene: Scene =
-            toml::from_str(text).map_err(|e| Error::Scene(e.to_string().trim_end().to_string()))?;
+        let scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
         scene.validate()?;
         Ok(scene)
     }
@@ -321,6 +320,38 @@ impl Scene {
             positive("solver.tolerance", t)?;
         }
         Ok(())
+    }
+}
+
+/// One line from a TOML error: `line L, column C: message`, with a missing or unknown field
+/// named by its dotted path (`rod.rest_length`) and any other error followed by its path.
+fn parse_error(text: &str, e: &toml::de::Error) -> Error {
+    // Without the input, the error's Display ends with "in `a.b`" naming the enclosing keys.
+    let mut bare = e.clone();
+    bare.set_input(None);
+    let bare = bare.to_string();
+    let path = bare
+        .lines()
+        .last()
+        .and_then(|l| l.strip_prefix("in `")?.strip_suffix('`'))
+        .unwrap_or("");
+    let mut message = e.message().trim_end().to_string();
+    let named = ["missing field `", "unknown field `"]
+        .iter()
+        .find(|p| message.starts_with(**p));
+    match named {
+        Some(p) if !path.is_empty() => message.insert_str(p.len(), &format!("{path}.")),
+        _ if !path.is_empty() => message.push_str(&format!(" in `{path}`")),
+        _ => {}
+    }
+    match e.span() {
+        Some(span) => {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
+            Error::Scene(format!("line {line}, column {column}: {message}"))
+        }
+        None => Error::Scene(message),
     }
 }
 

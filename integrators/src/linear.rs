@@ -177,7 +177,11 @@ impl SparseCholesky {
     pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
         let n = match (&self.symbolic, self.factored) {
             (Some(symbolic), true) => symbolic.nrows(),
-            _ => return Err(IntegratorError::SolverState("solve before a successful factor")),
+            _ => {
+                return Err(IntegratorError::SolverState(
+                    "solve before a successful factor",
+                ))
+            }
         };
         if n == 0 || rhs.len() % n != 0 {
             return Err(IntegratorError::SolverState(

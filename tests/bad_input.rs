@@ -1,0 +1,483 @@
+//! Bad scenes are rejected with an error that names the field and the value, never a
+//! panic: through the library (`Scene::from_toml`, `Scene::build_system`, `run`) and
+//! through the `splinerod` command line (exit code 2, one `error:` line on stderr).
+
+use splinerod::Scene;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A valid scene that every test alters by one small substitution.
+const BASE: &str = r#"[rod]
+rest_length = 1.0
+linear_density = 0.1
+stretch_stiffness = 100.0
+damping = 0.5
+control_points = 6
+degree = 3
+start = [0.0, 0.0, 0.0]
+end = [0.8, 0.0, 0.0]
+
+[[pins]]
+at = 0.0
+position = [0.0, 0.0, 0.0]
+
+[[pins]]
+at = 1.0
+
+[world]
+gravity = [0.0, -9.81, 0.0]
+
+[solver]
+method = "implicit-euler"
+dt = 0.01
+duration = 0.05
+newton_iterations = 10
+tolerance = 1e-10
+
+[output]
+samples = 11
+probes = [0.5]
+"#;
+
+/// The line of `text` that sets `key`; there must be exactly one.
+fn line_of<'a>(text: &'a str, key: &str) -> &'a str {
+    let prefix = format!("{key} = ");
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with(&prefix)).collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "`{key}` must be set exactly once in the base"
+    );
+    lines[0]
+}
+
+/// `text` with the value of `key` replaced by `value` (TOML syntax).
+fn set_in(text: &str, key: &str, value: &str) -> String {
+    text.replacen(line_of(text, key), &format!("{key} = {value}"), 1)
+}
+
+/// The base scene with the value of `key` replaced.
+fn set(key: &str, value: &str) -> String {
+    set_in(BASE, key, value)
+}
+
+/// The base scene without the line that sets `key`.
+fn without(key: &str) -> String {
+    BASE.replacen(&format!("{}\n", line_of(BASE, key)), "", 1)
+}
+
+/// The base scene with `line` added after the header `table`.
+fn with_line(table: &str, line: &str) -> String {
+    assert!(BASE.contains(table), "no {table} in the base");
+    BASE.replacen(table, &format!("{table}\n{line}"), 1)
+}
+
+/// Parses, validates and builds `text`, which must fail without panicking; the error.
+fn rejected(text: &str) -> String {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        Scene::from_toml(text).and_then(|scene| scene.build_system().map(|_| ()))
+    }));
+    match outcome {
+        Ok(Err(e)) => e.to_string(),
+        Ok(Ok(())) => panic!("scene accepted:\n{text}"),
+        Err(_) => panic!("scene panicked instead of failing:\n{text}"),
+    }
+}
+
+/// Parses and validates `text`, which must pass; only building it (or running it) fails.
+fn rejected_when_built(text: &str) -> String {
+    let scene = Scene::from_toml(text).expect("valid until built");
+    let run = catch_unwind(AssertUnwindSafe(|| splinerod::run(&scene))).expect("run panicked");
+    let run_error = run.expect_err("run accepted the scene").to_string();
+    assert_eq!(rejected(text), run_error);
+    run_error
+}
+
+fn assert_field(message: &str, field: &str) {
+    assert!(message.contains(field), "`{field}` not named in: {message}");
+}
+
+/// `message` names `field` followed by `value` (as Rust displays it).
+fn assert_field_value(message: &str, field: &str, value: &str) {
+    assert_field(message, field);
+    let after = message.split_once(field).unwrap().1;
+    let after = after.trim_start_matches(['`', ' ', '=']);
+    assert!(
+        after.starts_with(value),
+        "`{field}` not followed by {value} in: {message}"
+    );
+}
+
+/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
+fn shown(value: &str) -> String {
+    value.parse::<f64>().unwrap().to_string()
+}
+
+/// Negative, zero and non-finite values of `key` are rejected naming `field`.
+fn assert_needs_positive(key: &str, field: &str) {
+    for value in ["-2.5", "-1.0", "0.0", "0", "nan", "inf", "-inf"] {
+        let toml_value = if value == "0" { "0.0" } else { value };
+        assert_field_value(&rejected(&set(key, toml_value)), field, &shown(value));
+    }
+}
+
+#[test]
+fn base_scene_is_valid() {
+    let scene = Scene::from_toml(BASE).unwrap();
+    scene.build_system().unwrap();
+    assert_eq!(splinerod::run(&scene).unwrap().steps, 5);
+}
+
+#[test]
+fn missing_required_field() {
+    for (key, field) in [
+        ("rest_length", "rod.rest_length"),
+        ("linear_density", "rod.linear_density"),
+        ("stretch_stiffness", "rod.stretch_stiffness"),
+        ("control_points", "rod.control_points"),
+        ("method", "solver.method"),
+    ] {
+        let message = rejected(&without(key));
+        assert_field(&message, &format!("missing field `{field}`"));
+    }
+    let no_solver = BASE.split("[solver]").next().unwrap();
+    assert_field(&rejected(no_solver), "missing field `solver`");
+}
+
+#[test]
+fn unknown_field() {
+    let message = rejected(&with_line("[rod]", "colour = \"red\""));
+    assert_field(&message, "unknown field `rod.colour`");
+    let message = rejected(&with_line("[solver]", "newton_iteration = 5"));
+    assert_field(&message, "unknown field `solver.newton_iteration`");
+    assert_field(&message, "newton_iterations"); // the valid names are listed
+    let message = rejected(&with_line("[world]", "gravty = [0.0, 0.0, 0.0]"));
+    assert_field(&message, "unknown field `world.gravty`");
+}
+
+#[test]
+fn wrong_type_names_the_field() {
+    let message = rejected(&set("linear_density", "\"heavy\""));
+    assert_field(&message, "rod.linear_density");
+    let message = rejected(&set("control_points", "-6"));
+    assert_field(&message, "rod.control_points");
+    let message = rejected(&set("method", "\"explicit\""));
+    assert_field(&message, "solver.method");
+}
+
+#[test]
+fn non_positive_linear_density() {
+    assert_needs_positive("linear_density", "rod.linear_density");
+}
+
+#[test]
+fn non_positive_stretch_stiffness() {
+    assert_needs_positive("stretch_stiffness", "rod.stretch_stiffness");
+}
+
+#[test]
+fn non_positive_rest_length() {
+    assert_needs_positive("rest_length", "rod.rest_length");
+}
+
+#[test]
+fn non_positive_dt() {
+    assert_needs_positive("dt", "solver.dt");
+    // Also when the static solver ignores it.
+    let static_scene = set_in(&set("method", "\"static\""), "dt", "-0.01");
+    assert_field_value(&rejected(&static_scene), "solver.dt", "-0.01");
+}
+
+#[test]
+fn non_positive_duration() {
+    assert_needs_positive("duration", "solver.duration");
+}
+
+#[test]
+fn non_positive_tolerance() {
+    assert_needs_positive("tolerance", "solver.tolerance");
+}
+
+#[test]
+fn negative_or_non_finite_damping() {
+    for value in ["-0.5", "-1e-9", "nan", "inf"] {
+        assert_field_value(
+            &rejected(&set("damping", value)),
+            "rod.damping",
+            &shown(value),
+        );
+    }
+    Scene::from_toml(&set("damping", "0.0")).expect("zero damping is allowed");
+}
+
+#[test]
+fn too_few_control_points() {
+    for (degree, count) in [("3", "3"), ("3", "0"), ("1", "1"), ("5", "5")] {
+        let text = set_in(&set("degree", degree), "control_points", count);
+        assert_field_value(&rejected(&text), "rod.control_points", count);
+    }
+    Scene::from_toml(&set("control_points", "4")).expect("degree + 1 points suffice");
+}
+
+#[test]
+fn degree_out_of_range() {
+    for degree in ["0", "10"] {
+        assert_field_value(&rejected(&set("degree", degree)), "rod.degree", degree);
+    }
+}
+
+#[test]
+fn non_finite_scalars() {
+    for (key, field) in [
+        ("linear_density", "rod.linear_density"),
+        ("stretch_stiffness", "rod.stretch_stiffness"),
+        ("rest_length", "rod.rest_length"),
+        ("damping", "rod.damping"),
+        ("dt", "solver.dt"),
+        ("tolerance", "solver.tolerance"),
+    ] {
+        for value in ["nan", "inf", "-inf", "+nan"] {
+            assert_field_value(&rejected(&set(key, value)), field, &shown(value));
+        }
+    }
+}
+
+#[test]
+fn non_finite_rod_start_and_end() {
+    let message = rejected(&set("start", "[nan, 0.0, 0.0]"));
+    assert_field_value(&message, "rod.start", "[NaN, 0.0, 0.0]");
+    let message = rejected(&set("end", "[0.8, inf, 0.0]"));
+    assert_field_value(&message, "rod.end", "[0.8, inf, 0.0]");
+    let message = rejected(&set("end", "[0.8, 0.0, -inf]"));
+    assert_field_value(&message, "rod.end", "[0.8, 0.0, -inf]");
+}
+
+#[test]
+fn non_finite_gravity() {
+    for (value, display) in [
+        ("[0.0, -inf, 0.0]", "[0.0, -inf, 0.0]"),
+        ("[nan, -9.81, 0.0]", "[NaN, -9.81, 0.0]"),
+        ("[0.0, 0.0, inf]", "[0.0, 0.0, inf]"),
+    ] {
+        assert_field_value(&rejected(&set("gravity", value)), "world.gravity", display);
+    }
+}
+
+#[test]
+fn non_finite_pin_position() {
+    let message = rejected(&set("position", "[nan, 0.0, 0.0]"));
+    assert_field_value(&message, "pins[0].position", "[NaN, 0.0, 0.0]");
+    let message = rejected(&set("position", "[0.0, inf, 0.0]"));
+    assert_field_value(&message, "pins[0].position", "[0.0, inf, 0.0]");
+}
+
+#[test]
+fn pin_outside_the_rod() {
+    for value in ["-0.1", "1.5", "nan", "inf"] {
+        let text = BASE.replacen("at = 1.0", &format!("at = {value}"), 1);
+        assert_field_value(&rejected(&text), "pins[1].at", &shown(value));
+    }
+}
+
+#[test]
+fn probe_outside_the_rod() {
+    for value in ["-0.3", "1.2", "nan"] {
+        let text = set("probes", &format!("[0.5, {value}]"));
+        assert_field_value(&rejected(&text), "output.probes[1]", &shown(value));
+    }
+}
+
+#[test]
+fn initial_control_points_count_mismatch() {
+    let points =
+        "[[0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.4, 0.0, 0.0], [0.6, 0.0, 0.0], [0.8, 0.0, 0.0]]";
+    let explicit = BASE.replacen(line_of(BASE, "start"), "", 1).replacen(
+        line_of(BASE, "end"),
+        &format!("initial_control_points = {points}"),
+        1,
+    );
+    let message = rejected(&explicit);
+    assert_field_value(&message, "rod.initial_control_points", "5 points");
+    assert!(message.contains("6"), "expected count not given: {message}");
+    // With start/end as well it is ambiguous.
+    let both = with_line("[rod]", &format!("initial_control_points = {points}"));
+    assert_field(&rejected(&both), "rod.initial_control_points");
+}
+
+#[test]
+fn explicit_knots_unsorted() {
+    let knots = "knots = [0.0, 0.0, 0.0, 0.0, 0.6, 0.4, 1.0, 1.0, 1.0, 1.0]";
+    let message = rejected_when_built(&with_line("[rod]", knots));
+    assert_field_value(
+        &message,
+        "rod.knots",
+        "[0.0, 0.0, 0.0, 0.0, 0.6, 0.4, 1.0, 1.0, 1.0, 1.0]",
+    );
+    assert!(message.contains("not sorted"), "{message}");
+}
+
+#[test]
+fn explicit_knots_wrong_length() {
+    let knots = "knots = [0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0]";
+    let message = rejected(&with_line("[rod]", knots));
+    assert_field_value(&message, "rod.knots", "9 values");
+    assert!(
+        message.contains("10"),
+        "expected length not given: {message}"
+    );
+}
+
+#[test]
+fn explicit_knots_non_finite() {
+    let knots = "knots = [0.0, 0.0, 0.0, 0.0, nan, 0.6, 1.0, 1.0, 1.0, 1.0]";
+    let message = rejected_when_built(&with_line("[rod]", knots));
+    assert_field(&message, "rod.knots");
+    assert!(message.contains("NaN"), "{message}");
+}
+
+#[test]
+fn named_knots_unknown() {
+    let message = rejected(&with_line("[rod]", "knots = \"bogus\""));
+    assert_field_value(&message, "rod.knots", "\"bogus\"");
+}
+
+#[test]
+fn pin_position_disagreeing_with_initial_shape() {
+    let message = rejected_when_built(&set("position", "[0.0, 0.1, 0.0]"));
+    assert_field_value(&message, "pins[0].position", "[0.0, 0.1, 0.0]");
+    let pinned_end = BASE.replacen("at = 1.0", "at = 1.0\nposition = [1.0, 0.0, 0.0]", 1);
+    let message = rejected_when_built(&pinned_end);
+    assert_field_value(&message, "pins[1].position", "[1.0, 0.0, 0.0]");
+}
+
+#[test]
+fn implicit_euler_without_dt_or_duration() {
+    assert_field_value(&rejected(&without("dt")), "solver.dt", "missing");
+    let message = rejected(&without("duration"));
+    assert_field_value(&message, "solver.duration", "missing");
+    let static_scene = without("dt");
+    Scene::from_toml(&set_in(&static_scene, "method", "\"static\"")).expect("static needs no dt");
+}
+
+#[test]
+fn zero_newton_iterations() {
+    let message = rejected(&set("newton_iterations", "0"));
+    assert_field_value(&message, "solver.newton_iterations", "0");
+}
+
+#[test]
+fn too_few_samples() {
+    for samples in ["1", "0"] {
+        let message = rejected(&set("samples", samples));
+        assert_field_value(&message, "output.samples", samples);
+    }
+}
+
+// ---------------------------------------------------------------- command line
+
+/// A fresh directory for one CLI test.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("splinerod-bad-input-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn splinerod(args: &[&Path]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splinerod"))
+        .arg("run")
+        .args(args)
+        .output()
+        .expect("the splinerod binary runs")
+}
+
+/// Runs `splinerod run` on `path`, which must fail with code 2 and one `error:` line.
+fn cli_error(path: &Path) -> String {
+    let out = splinerod(&[path]);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.starts_with("error:"), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    stderr
+}
+
+/// Writes `text` to a fresh directory and runs the CLI on it; the error line.
+fn cli_error_for(test: &str, text: &str) -> String {
+    let dir = temp_dir(test);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let stderr = cli_error(&path);
+    std::fs::remove_dir_all(&dir).unwrap();
+    stderr
+}
+
+#[test]
+fn cli_nan_density() {
+    let stderr = cli_error_for("nan", &set("linear_density", "nan"));
+    assert_field_value(&stderr, "rod.linear_density", "NaN");
+}
+
+#[test]
+fn cli_unknown_field() {
+    let stderr = cli_error_for("unknown", &with_line("[rod]", "colour = \"red\""));
+    assert_field(&stderr, "rod.colour");
+    assert!(stderr.contains("scene.toml"), "file not named: {stderr}");
+}
+
+#[test]
+fn cli_missing_file() {
+    let dir = temp_dir("missing");
+    let path = dir.join("no_such_scene.toml");
+    let stderr = cli_error(&path);
+    assert!(stderr.contains(&path.display().to_string()), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cli_malformed_toml() {
+    let text = BASE.replacen("linear_density = 0.1", "linear_density = = 0.1", 1);
+    let stderr = cli_error_for("syntax", &text);
+    assert!(stderr.contains("scene.toml"), "file not named: {stderr}");
+    assert!(stderr.contains("line 3"), "line not named: {stderr}");
+    let unclosed = BASE.replacen("[world]", "[world", 1);
+    let stderr = cli_error_for("unclosed", &unclosed);
+    assert!(stderr.contains("line 18"), "line not named: {stderr}");
+}
+
+/// `value[path]` for a dotted `path`, which must exist.
+fn get<'a>(value: &'a serde_json::Value, path: &str) -> &'a serde_json::Value {
+    path.split('.').fold(value, |v, key| {
+        v.get(key).unwrap_or_else(|| panic!("JSON has no `{path}`"))
+    })
+}
+
+#[test]
+fn cli_valid_scene_writes_json() {
+    let dir = temp_dir("valid");
+    let json = dir.join("out.json");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/catenary_static.toml");
+    let out = splinerod(&[&scene, Path::new("--json"), &json]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
+    let text = std::fs::read_to_string(&json).expect("JSON written");
+    let result: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
+    for key in ["time", "steps", "control_points", "wall_seconds"] {
+        assert!(get(&result, key).is_number(), "`{key}` is not a number");
+    }
+    for key in ["energy.kinetic", "energy.stretch", "energy.gravity"] {
+        assert!(get(&result, key).as_f64().unwrap().is_finite(), "`{key}`");
+    }
+    let s = get(&result, "samples.s").as_array().unwrap();
+    let positions = get(&result, "samples.positions").as_array().unwrap();
+    assert!(s.len() >= 2);
+    assert_eq!(s.len(), positions.len());
+    assert!(positions.iter().all(|p| p.as_array().unwrap().len() == 3));
+    for key in ["probes", "knots", "pin_forces"] {
+        assert!(get(&result, key).is_array(), "`{key}` is not an array");
+    }
+    assert!(get(&result, "solver.newton_iterations").is_number());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
