@@ -149,6 +149,22 @@ impl BlockBanded {
         &self.blocks[i * (self.bandwidth + 1) + k]
     }
 
+    /// Sets block `(i, j)` to `b` (and `(j, i)` to `bᵀ`); `b` must be symmetric if `i == j`.
+    #[track_caller]
+    pub fn set_block(&mut self, i: usize, j: usize, b: &Matrix3<Real>) {
+        let w = self.bandwidth + 1;
+        let (lo, hi, stored) = if i <= j {
+            (i, j, *b)
+        } else {
+            (j, i, b.transpose())
+        };
+        assert!(
+            hi - lo < w && hi < self.n,
+            "block ({i}, {j}) is outside the band"
+        );
+        self.blocks[lo * w + hi - lo] = stored;
+    }
+
     /// Whether every stored entry is finite.
     pub fn is_finite(&self) -> bool {
         self.blocks.iter().all(|b| b.iter().all(|x| x.is_finite()))

@@ -9,6 +9,7 @@
 //! \\(\mu = S^{-1}(c - G x - G y)\\), \\(\Delta x = y + Y \mu\\): `3k + 1` back-substitutions.
 
 use crate::linear::SparseCholesky;
+use crate::point_pins::PointPins;
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -25,6 +26,12 @@ pub(crate) struct Constraints {
     schur: Vec<Real>,
     /// Scratch for the multipliers, 3k.
     sol: Vec<Real>,
+    /// Pins handled by the Schur complement (the others are eliminated).
+    general: Vec<usize>,
+    /// Pins eliminated from the system.
+    pub points: PointPins,
+    /// Scratch: the Schur pins' \(G^T\mu\) at each eliminated control point.
+    others: Vec<Vector3<Real>>,
     n: usize,
 }
 
@@ -37,6 +44,10 @@ impl Constraints {
         }
         self.targets.resize(pins.len(), Vector3::zeros());
         self.n = rod.len();
+        self.points.setup(&self.rows)?;
+        self.general.clear();
+        self.general
+            .extend((0..pins.len()).filter(|&p| !self.points.contains(p)));
         Ok(())
     }
 
@@ -94,18 +105,19 @@ impl Constraints {
         }
     }
 
-    /// Computes `Y = A⁻¹ Gᵀ` and factorises `S = G Y`.
+    /// Computes `Y = A⁻¹ Gᵀ` and factorises `S = G Y` for the pins not eliminated.
     pub fn factor(&mut self, solver: &mut SparseCholesky) -> Result<(), IntegratorError> {
-        let (m, dofs) = (3 * self.len(), 3 * self.n);
+        let (m, dofs) = (3 * self.general.len(), 3 * self.n);
         if m == 0 {
             return Ok(());
         }
         self.y.clear();
         self.y.resize(m * dofs, 0.0);
-        for (p, b) in self.rows.iter().enumerate() {
+        for (g, &p) in self.general.iter().enumerate() {
+            let b = &self.rows[p];
             for a in 0..3 {
-                let col = &mut self.y[(3 * p + a) * dofs..(3 * p + a + 1) * dofs];
-                for k in 0..b.order {
+                let col = &mut self.y[(3 * g + a) * dofs..(3 * g + a + 1) * dofs];
+                for k in (0..b.order).filter(|&k| !self.points.holds(b.first + k)) {
                     col[3 * (b.first + k) + a] = b.value[k];
                 }
             }
@@ -121,36 +133,47 @@ impl Constraints {
         dense_cholesky(&mut self.schur, m).map_err(|_| IntegratorError::RedundantPins)
     }
 
-    /// Row `i` of `G` (pin `i / 3`, coordinate `i % 3`) dotted with a flat vector.
+    /// Row `i` of the Schur pins' `G` (pin `general[i / 3]`, coordinate `i % 3`) dotted
+    /// with a flat vector.
     fn row_dot(&self, i: usize, flat: &[Real]) -> Real {
-        let (b, a) = (&self.rows[i / 3], i % 3);
+        let (b, a) = (&self.rows[self.general[i / 3]], i % 3);
         (0..b.order)
             .map(|k| b.value[k] * flat[3 * (b.first + k) + a])
             .sum()
     }
 
-    /// Given `flat = -A⁻¹ r` and the current iterate `x`, turns `flat` into `Δx` and
-    /// writes the multipliers `μ`.
+    /// Given `flat = A⁻¹ b` (with the eliminated pins' steps in place) and the current
+    /// iterate `x`, turns `flat` into `Δx` and writes every pin's multiplier `μ`.
     pub fn correct(&mut self, x: &[Vector3<Real>], flat: &mut [Real], mu: &mut [Vector3<Real>]) {
-        let (m, dofs) = (3 * self.len(), 3 * self.n);
-        let mut rhs = [0.0; 3];
-        for p in 0..self.len() {
-            let gx = self.apply_row(p, x);
-            for (a, r) in rhs.iter_mut().enumerate() {
-                *r = self.targets[p][a] - gx[a] - self.row_dot(3 * p + a, flat);
-            }
-            mu[p] = Vector3::from(rhs);
-        }
+        let (m, dofs) = (3 * self.general.len(), 3 * self.n);
         self.sol.clear();
-        self.sol.extend(mu.iter().flat_map(|v| [v.x, v.y, v.z]));
+        for &p in &self.general {
+            let gx = self.apply_row(p, x);
+            self.sol.extend((0..3).map(|a| self.targets[p][a] - gx[a]));
+        }
+        for i in 0..m {
+            self.sol[i] -= self.row_dot(i, flat);
+        }
         dense_cholesky_solve(&self.schur, m, &mut self.sol);
-        for (p, v) in mu.iter_mut().enumerate() {
-            *v = Vector3::new(self.sol[3 * p], self.sol[3 * p + 1], self.sol[3 * p + 2]);
+        for (g, &p) in self.general.iter().enumerate() {
+            mu[p] = Vector3::new(self.sol[3 * g], self.sol[3 * g + 1], self.sol[3 * g + 2]);
         }
         for (j, s) in self.sol.iter().enumerate() {
             let col = &self.y[j * dofs..(j + 1) * dofs];
             flat.iter_mut().zip(col).for_each(|(f, c)| *f += s * c);
         }
+        self.others.clear();
+        for k in self.points.control_points() {
+            let mut sum = Vector3::zeros();
+            for &p in &self.general {
+                let b = &self.rows[p];
+                if let Some(i) = k.checked_sub(b.first).filter(|&i| i < b.order) {
+                    sum += mu[p] * b.value[i];
+                }
+            }
+            self.others.push(sum);
+        }
+        self.points.multipliers(flat, &self.others, mu);
     }
 }
 

@@ -29,6 +29,7 @@ mod kkt;
 pub mod linear;
 pub mod modal;
 pub mod newton;
+mod point_pins;
 mod statics;
 
 pub use error::IntegratorError;

@@ -140,10 +140,12 @@ pub fn solve(
         stats.newton_iterations += 1;
         problem.residual(system, &mut ws.r);
         newton_direction(problem, system, x, ws, &mut stats)?;
-        let t = line_search(problem, system, x, ws, params.line_search, &mut stats)?;
+        // A step already below the tolerance is taken whole: its merit change is rounding.
+        let full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
+        let search = params.line_search && full > tolerance;
+        let t = line_search(problem, system, x, ws, search, &mut stats)?;
         problem.on_step(t);
-        let step = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * t * length;
-        if problem.converged(step, tolerance) {
+        if problem.converged(full * t, tolerance) {
             stats.converged = true;
             break;
         }
@@ -165,6 +167,7 @@ fn newton_direction(
         problem.matrix(system, &mut ws.matrix);
         let rho = problem.augmentation();
         ws.constraints.add_gram(rho, &mut ws.matrix);
+        ws.constraints.points.eliminate_matrix(&mut ws.matrix);
         match ws.solver.factor(&ws.matrix, epoch) {
             Ok(_) => break rho,
             Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
@@ -184,6 +187,10 @@ fn newton_direction(
     for (i, (r, aug)) in ws.r.iter().zip(&ws.base).enumerate() {
         ws.flat[3 * i..3 * i + 3].copy_from_slice((aug - r).as_slice());
     }
+    let targets = &ws.constraints.targets;
+    ws.constraints
+        .points
+        .eliminate_rhs(x, targets, &mut ws.flat);
     ws.solver.solve_in_place(&mut ws.flat)?;
     ws.constraints.correct(x, &mut ws.flat, &mut ws.multipliers);
     for (i, d) in ws.dx.iter_mut().enumerate() {

@@ -272,3 +272,33 @@ fn bad_parameters_are_errors() {
         Err(IntegratorError::RedundantPins)
     ));
 }
+
+#[test]
+fn end_pins_are_eliminated_consistently_with_interior_pins() {
+    // Pins at both clamped ends (eliminated), one whose row overlaps the first end's
+    // control point, and one inside (both by Schur complement): at equilibrium the pins
+    // hold, and the pin forces balance the internal and gravity forces at every control
+    // point: ∇E = Σ_p G_pᵀ f_p.
+    let g = Vector3::new(0.0, -9.81, 0.0);
+    let mut sys = Quadratic::new(10, 3.0, g);
+    sys.pins = [0.0, 0.05, 1.3, 2.0]
+        .iter()
+        .map(|&s| Pin::here(&sys.rod, s).unwrap())
+        .collect();
+    let mut solver = StaticSolver::new(StaticParams::default()).unwrap();
+    assert!(solver.solve(&mut sys).unwrap().converged);
+    for pin in &sys.pins {
+        assert!(pin.violation(&sys.rod).unwrap().norm() < 1e-12);
+    }
+    let mut balance = vec![Vector3::zeros(); sys.rod.len()];
+    sys.add_potential_gradient(&mut balance);
+    for (pin, force) in sys.pins.iter().zip(solver.pin_forces()) {
+        let row = pin.row(&sys.rod).unwrap();
+        for k in 0..row.order {
+            balance[row.first + k] -= force * row.value[k];
+        }
+    }
+    let weight = 0.5 * 2.0 * 9.81;
+    let worst = balance.iter().map(|v| v.amax()).fold(0.0, Real::max);
+    assert!(worst < 1e-10 * weight, "force imbalance {worst:e}");
+}

@@ -1,0 +1,138 @@
+//! Elimination of pins that hold a single control point (a pin at a clamped end: its row
+//! of `G` is one 1 and zeros). For such a pin at control point `k` the constraint is
+//! \\(\Delta x_k = \delta_k = c - x_k\\); instead of a Schur complement (three extra
+//! back-substitutions per pin) the Newton system is rewritten
+//!
+//! \\[ A_{jk} \to 0,\ A_{kj} \to 0\ (j \ne k), \quad A_{kk} \to I, \quad
+//! b_j \to b_j - A_{jk}\delta_k, \quad b_k \to \delta_k, \\]
+//!
+//! which keeps `A` symmetric positive definite and banded. The pin's multiplier follows
+//! from the original row `k`: \\(\mu = (A \Delta x)_k - b_k - (G^T\mu)_k\\) with the
+//! other pins' multipliers.
+
+use crate::IntegratorError;
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::{BasisValues, BlockBanded, Real};
+
+/// Pins eliminated from the Newton system, with what is needed to recover their forces.
+#[derive(Debug, Default)]
+pub(crate) struct PointPins {
+    /// `(pin index, control point)` of each eliminated pin.
+    pins: Vec<(usize, usize)>,
+    /// Per eliminated pin: blocks \\(A_{jk}\\) for `j = k - bw ..= k + bw` before elimination.
+    saved: Vec<Matrix3<Real>>,
+    /// Per eliminated pin: the right-hand side `b_k` before elimination.
+    rhs: Vec<Vector3<Real>>,
+    bandwidth: usize,
+}
+
+/// The control point a pin's row holds alone with weight 1, if it does.
+fn single_point(row: &BasisValues) -> Option<usize> {
+    let mut nonzero = (0..row.order).filter(|&k| row.value[k] != 0.0);
+    match (nonzero.next(), nonzero.next()) {
+        (Some(k), None) if (row.value[k] - 1.0).abs() <= 1e-14 => Some(row.first + k),
+        _ => None,
+    }
+}
+
+impl PointPins {
+    /// Finds the pins to eliminate among `rows`; two pins on one control point conflict.
+    pub fn setup(&mut self, rows: &[BasisValues]) -> Result<(), IntegratorError> {
+        self.pins.clear();
+        for (p, row) in rows.iter().enumerate() {
+            if let Some(k) = single_point(row) {
+                if self.pins.iter().any(|&(_, other)| other == k) {
+                    return Err(IntegratorError::RedundantPins);
+                }
+                self.pins.push((p, k));
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether pin `p` is eliminated.
+    pub fn contains(&self, p: usize) -> bool {
+        self.pins.iter().any(|&(q, _)| q == p)
+    }
+
+    /// Whether control point `k` is held by an eliminated pin.
+    pub fn holds(&self, k: usize) -> bool {
+        self.pins.iter().any(|&(_, q)| q == k)
+    }
+
+    /// Saves the eliminated columns of `a`, then decouples them (identity on the diagonal).
+    pub fn eliminate_matrix(&mut self, a: &mut BlockBanded) {
+        let (n, bw) = (a.dim(), a.bandwidth());
+        self.bandwidth = bw;
+        let width = 2 * bw + 1;
+        self.saved.clear();
+        self.saved.resize(self.pins.len() * width, Matrix3::zeros());
+        for (e, &(_, k)) in self.pins.iter().enumerate() {
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                self.saved[e * width + j + bw - k] = a.block(j, k);
+            }
+        }
+        for &(_, k) in &self.pins {
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                let value = if j == k {
+                    Matrix3::identity()
+                } else {
+                    Matrix3::zeros()
+                };
+                a.set_block(j, k, &value);
+            }
+        }
+    }
+
+    /// Rewrites the flat right-hand side `b` for prescribed steps `δ_k = c_p − x_k`.
+    pub fn eliminate_rhs(
+        &mut self,
+        x: &[Vector3<Real>],
+        targets: &[Vector3<Real>],
+        b: &mut [Real],
+    ) {
+        let (bw, n) = (self.bandwidth, x.len());
+        let width = 2 * bw + 1;
+        self.rhs.clear();
+        for &(_, k) in &self.pins {
+            self.rhs.push(flat3(b, k));
+        }
+        for (e, &(p, k)) in self.pins.iter().enumerate() {
+            let delta = targets[p] - x[k];
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                let change = self.saved[e * width + j + bw - k] * delta;
+                for c in 0..3 {
+                    b[3 * j + c] -= change[c];
+                }
+            }
+        }
+        for &(p, k) in &self.pins {
+            let delta = targets[p] - x[k];
+            b[3 * k..3 * k + 3].copy_from_slice(delta.as_slice());
+        }
+    }
+
+    /// The eliminated control points, in pin order.
+    pub fn control_points(&self) -> impl Iterator<Item = usize> + '_ {
+        self.pins.iter().map(|&(_, k)| k)
+    }
+
+    /// Multipliers of the eliminated pins from the solved step `dx` (flat) and `others[e]`
+    /// \(= (G^T\mu)_k\) of the remaining pins at each eliminated control point.
+    pub fn multipliers(&self, dx: &[Real], others: &[Vector3<Real>], mu: &mut [Vector3<Real>]) {
+        let (bw, n) = (self.bandwidth, dx.len() / 3);
+        let width = 2 * bw + 1;
+        for (e, &(p, k)) in self.pins.iter().enumerate() {
+            let mut row = -self.rhs[e] - others[e];
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                // A_kj = A_jkᵀ.
+                row += self.saved[e * width + j + bw - k].tr_mul(&flat3(dx, j));
+            }
+            mu[p] = row;
+        }
+    }
+}
+
+fn flat3(v: &[Real], k: usize) -> Vector3<Real> {
+    Vector3::new(v[3 * k], v[3 * k + 1], v[3 * k + 2])
+}
