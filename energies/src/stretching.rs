@@ -40,16 +40,20 @@ impl Stretching {
 
     /// The 3×3 density Hessian `H(C')`, clamped to PSD for [`HessianKind::Definite`].
     fn density_hessian(&self, c1: &Vector3<Real>, kind: HessianKind) -> Matrix3<Real> {
-        let half = 0.5 * self.stiffness;
+        let ea = self.stiffness;
         let g2 = c1.norm_squared();
-        let (mut across, mut along) = (half * (g2 - 1.0), half * (3.0 * g2 - 1.0));
-        if kind == HessianKind::Definite {
-            across = across.max(0.0);
-            along = along.max(0.0);
-        }
-        let mut h = Matrix3::from_diagonal_element(across);
-        if g2 > 0.0 {
-            h += c1 * c1.transpose() * ((along - across) / g2);
+        // H = across·I + β C'C'ᵀ with across = EA(γ²−1)/2 and β = (along − across)/γ² = EA.
+        let (across, beta) = match kind {
+            HessianKind::Exact => (0.5 * ea * (g2 - 1.0), ea),
+            _ if g2 >= 1.0 => (0.5 * ea * (g2 - 1.0), ea),
+            // Compression: the transverse eigenvalue is clamped to 0, the axial one too
+            // below γ² = 1/3.
+            _ if 3.0 * g2 > 1.0 => (0.0, 0.5 * ea * (3.0 * g2 - 1.0) / g2),
+            _ => (0.0, 0.0),
+        };
+        let mut h = c1 * c1.transpose() * beta;
+        for k in 0..3 {
+            h[(k, k)] += across;
         }
         h
     }
