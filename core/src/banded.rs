@@ -57,6 +57,21 @@ impl SymBanded {
         self.data[i * (self.bandwidth + 1) + j - i] += v;
     }
 
+    /// Replaces the rows and columns `old` by `new_len` zero rows and columns, moving the
+    /// rows after them (whose entries keep their offsets). Entries coupling a replaced
+    /// index with another index are zeroed; the rest are untouched.
+    pub fn reindex(&mut self, old: &std::ops::Range<usize>, new_len: usize) {
+        let w = self.bandwidth + 1;
+        for i in old.start.saturating_sub(self.bandwidth)..old.start {
+            for k in (old.start - i)..w {
+                self.data[i * w + k] = 0.0;
+            }
+        }
+        let zeros = std::iter::repeat_n(0.0, new_len * w);
+        self.data.splice(old.start * w..old.end * w, zeros);
+        self.n = self.n + new_len - old.len();
+    }
+
     /// `y = self · x` for a field of 3-vectors (the matrix acts on each coordinate).
     #[track_caller]
     pub fn mul_vec3(&self, x: &[Vector3<Real>], y: &mut [Vector3<Real>]) {

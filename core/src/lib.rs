@@ -37,6 +37,7 @@ pub mod basis;
 pub mod bspline;
 mod error;
 pub mod knot_map;
+pub mod local_update;
 pub mod pins;
 pub mod quadrature;
 pub mod rod;

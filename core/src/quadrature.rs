@@ -8,7 +8,9 @@
 //! `m = max(d + 1, 2d − 1)`: exact for both.
 
 use crate::basis::{spans, BasisSpace, BasisValues, MAX_ORDER};
+use crate::local_update::ChangedRegion;
 use crate::{CoreError, Real};
+use std::ops::Range;
 
 /// Gauss–Legendre nodes and weights on `[0, 1]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -168,6 +170,52 @@ impl QuadratureTable {
             d1: &self.d1[range.clone()],
             d2: &self.d2[range],
         }
+    }
+
+    /// Indices of the points with parameter in `[a, b)` (points are sorted by parameter).
+    pub fn points_in(&self, (a, b): (Real, Real)) -> Range<usize> {
+        self.s.partition_point(|&s| s < a)..self.s.partition_point(|&s| s < b)
+    }
+
+    /// Re-tabulates the spans of `region` on the new basis `space`, replacing the old
+    /// points in the region's interval and shifting the first-function index of the
+    /// points after it by the change in function count.
+    pub fn replace_spans(
+        &mut self,
+        space: &dyn BasisSpace,
+        region: &ChangedRegion,
+    ) -> Result<(), CoreError> {
+        let old = self.points_in(region.interval);
+        let mut fresh = Self {
+            order: self.order,
+            points_per_span: self.points_per_span,
+            ..Self::default()
+        };
+        let rule = GaussLegendre::new(self.points_per_span.max(1));
+        let (t, d) = (space.knots(), space.degree());
+        let mut b = BasisValues::default();
+        for k in region.new_spans.clone().filter(|&k| t[k + 1] > t[k]) {
+            let h = t[k + 1] - t[k];
+            for (x, w) in rule.nodes.iter().zip(&rule.weights) {
+                let s = t[k] + h * x;
+                space.evaluate(s, &mut b)?;
+                debug_assert_eq!(b.first, k - d);
+                fresh.push(s, w * h, &b);
+            }
+        }
+        let shift = region.new_functions.len() as isize - region.old_functions.len() as isize;
+        for f in &mut self.first[old.end..] {
+            *f = f.wrapping_add_signed(shift);
+        }
+        let o = self.order;
+        self.s.splice(old.clone(), fresh.s);
+        self.weight.splice(old.clone(), fresh.weight);
+        self.first.splice(old.clone(), fresh.first);
+        let flat = old.start * o..old.end * o;
+        self.value.splice(flat.clone(), fresh.value);
+        self.d1.splice(flat.clone(), fresh.d1);
+        self.d2.splice(flat, fresh.d2);
+        Ok(())
     }
 
     /// All points, in increasing parameter order.

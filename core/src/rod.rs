@@ -282,7 +282,14 @@ impl Rod {
         map.apply_in_place(&mut self.positions);
         map.apply_in_place(&mut self.velocities);
         self.topology_epoch += 1;
-        self.rebuild_caches()?;
+        crate::local_update::update_caches(
+            &map,
+            self.basis.as_ref(),
+            self.material.linear_density,
+            &mut self.quadrature,
+            &mut self.mass,
+            &mut self.lumped,
+        )?;
         Ok(map)
     }
 }

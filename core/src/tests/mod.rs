@@ -1,6 +1,7 @@
 //! Unit tests of the core kernels.
 mod basis;
 mod knots;
+mod local_update;
 mod rod;
 
 use crate::{BSplineSpace, BasisSpace, Real};
