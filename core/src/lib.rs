@@ -35,6 +35,7 @@
 pub mod banded;
 pub mod basis;
 pub mod bspline;
+mod cutting;
 mod error;
 pub mod knot_map;
 pub mod local_update;

@@ -65,7 +65,10 @@ pub fn update_caches(
     table.replace_spans(space, &region)?;
     mass.reindex(&region.old_functions, region.new_functions.len());
     let (start, end) = (region.old_functions.start, region.old_functions.end);
-    lumped.splice(start..end, std::iter::repeat_n(0.0, region.new_functions.len()));
+    lumped.splice(
+        start..end,
+        std::iter::repeat_n(0.0, region.new_functions.len()),
+    );
     accumulate(table, &region, mu, mass, lumped);
     Ok(())
 }

@@ -1,0 +1,70 @@
+//! Cutting (paper §5.1): raising the multiplicity of an interior knot `s` to `d + 1`
+//! makes the curve discontinuous there; no basis function straddles `s`, so the mass
+//! matrix, every energy integrated span by span and every Newton matrix decouple into
+//! independent pieces with no other special treatment.
+
+use crate::{CoreError, KnotMap, Real, Rod};
+
+impl Rod {
+    /// Cuts the rod at material coordinate `s` (strictly inside `(0, L)`) by exact knot
+    /// insertions until `s` has multiplicity `degree + 1`; returns the maps applied, in
+    /// order, so that cached per-coefficient data can follow. Errors, changing nothing,
+    /// if `s` is outside the rod or already a cut.
+    pub fn cut(&mut self, s: Real) -> Result<Vec<KnotMap>, CoreError> {
+        let d = self.basis().degree();
+        let (start, end) = self.basis().domain();
+        if !(s > start && s < end) {
+            return Err(CoreError::OutsideDomain { s, start, end });
+        }
+        let present = self.knot_multiplicity(s);
+        if present > d {
+            return Err(CoreError::MultiplicityTooHigh {
+                value: s,
+                multiplicity: present + 1,
+                max: d + 1,
+            });
+        }
+        (present..=d).map(|_| self.insert_knot(s)).collect()
+    }
+
+    /// Multiplicity of the value `s` in the knot vector (O(log n): knots are sorted).
+    pub fn knot_multiplicity(&self, s: Real) -> usize {
+        let knots = self.basis().knots();
+        knots.partition_point(|&t| t <= s) - knots.partition_point(|&t| t < s)
+    }
+
+    /// Material coordinates of the cuts (interior knots of multiplicity `degree + 1`),
+    /// increasing. One pass over the knots.
+    pub fn cuts(&self) -> Vec<Real> {
+        let d = self.basis().degree();
+        let (start, end) = self.basis().domain();
+        let knots = self.basis().knots();
+        let mut out = Vec::new();
+        let mut run = 0;
+        for (i, &t) in knots.iter().enumerate() {
+            run = if i > 0 && knots[i - 1] == t {
+                run + 1
+            } else {
+                1
+            };
+            if run == d + 1 && t > start && t < end {
+                out.push(t);
+            }
+        }
+        out
+    }
+
+    /// Number of mechanically independent pieces (one more than the number of cuts).
+    pub fn pieces(&self) -> usize {
+        self.cuts().len() + 1
+    }
+
+    /// Whether knot `index` belongs to a cut (removing it would reconnect two pieces).
+    pub fn is_cut_knot(&self, index: usize) -> bool {
+        let d = self.basis().degree();
+        self.basis()
+            .knots()
+            .get(index)
+            .is_some_and(|&t| self.knot_multiplicity(t) > d)
+    }
+}
