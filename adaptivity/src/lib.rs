@@ -6,8 +6,11 @@
 //! knot maps of `splinerod-core`, so the curve, its motion and every energy are unchanged
 //! by an insertion.
 //!
-//! This crate currently defines the extension point, [`RefinementCriterion`]; the
-//! curvature and interaction criteria and the adapt step build on it.
+//! * [`RefinementCriterion`] — the extension point: look at a rod, mark insertions
+//!   and removals, mutate nothing;
+//! * [`CurvatureCriterion`] (eq. 13 on the control polygon) and [`InteractionCriterion`]
+//!   (knots where the rod is grabbed or touched);
+//! * [`Adapter`] — the adapt step with its limits and hysteresis ([`AdaptParams`]).
 //!
 //! ```
 //! use splinerod_adaptivity::{Refinement, RefinementCriterion};
@@ -32,6 +35,16 @@
 //! # Ok::<(), splinerod_core::CoreError>(())
 //! ```
 #![warn(missing_docs)]
+
+mod adapter;
+pub mod curvature;
+mod error;
+mod interaction;
+
+pub use adapter::{AdaptParams, AdaptReport, Adapter};
+pub use curvature::CurvatureCriterion;
+pub use error::AdaptError;
+pub use interaction::InteractionCriterion;
 
 use splinerod_core::{Real, Rod};
 
@@ -61,6 +74,12 @@ pub trait RefinementCriterion: Send + Sync {
     }
     /// Appends this criterion's proposals to `out`.
     fn mark(&self, rod: &Rod, interactions: &[Real], out: &mut Vec<Refinement>);
+    /// Whether the knot at material coordinate `knot` must stay although another
+    /// criterion proposes removing it. Default: no veto.
+    fn vetoes_removal(&self, rod: &Rod, interactions: &[Real], knot: Real) -> bool {
+        let _ = (rod, interactions, knot);
+        false
+    }
 }
 
 /// The criterion that never proposes anything.

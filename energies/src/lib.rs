@@ -2,7 +2,7 @@
 //!
 //! Potential energies of a rod, as functions of its control points, through one small
 //! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12)
-//! and uniform [`Gravity`]. The [`conformance`] module checks any energy (gradient and
+//! uniform [`Gravity`] and the [`PointSpring`] of a grab. The [`conformance`] module checks any energy (gradient and
 //! Hessian against finite differences, symmetry, definiteness, invariances).
 //!
 //! Energies are integrals over the rest arclength `s`, evaluated with the rod's cached
@@ -30,8 +30,10 @@
 pub mod conformance;
 mod energy;
 mod gravity;
+mod point_spring;
 mod stretching;
 
 pub use energy::{finite_difference_hessian, Energy};
 pub use gravity::Gravity;
+pub use point_spring::PointSpring;
 pub use stretching::Stretching;

@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
 use splinerod_energies::conformance::{check_energy, Expectations, RigidInvariance};
-use splinerod_energies::{finite_difference_hessian, Energy, Gravity, Stretching};
+use splinerod_energies::{finite_difference_hessian, Energy, Gravity, PointSpring, Stretching};
 
 fn energies() -> Vec<(Box<dyn Energy>, Expectations)> {
     let g = Vector3::new(0.0, -9.81, 0.0);
@@ -14,6 +14,13 @@ fn energies() -> Vec<(Box<dyn Energy>, Expectations)> {
             Expectations {
                 zero_at_rest: true,
                 rigid: RigidInvariance::Full,
+            },
+        ),
+        (
+            Box::new(PointSpring::new(0.37, Vector3::new(0.2, -0.1, 0.05), 50.0).unwrap()),
+            Expectations {
+                zero_at_rest: false,
+                rigid: RigidInvariance::None,
             },
         ),
         (

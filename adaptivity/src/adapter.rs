@@ -1,0 +1,237 @@
+//! The adapt step run after each integration step (paper §4.1, ADAPTATION()): insert
+//! while some criterion marks an insertion, then remove what is marked for removal.
+//!
+//! Guards, all in [`AdaptParams`]: at most `max_control_points`; no span shorter than
+//! `min_span` (m); removals only while together they move the curve by at most
+//! `shape_tolerance` (m, summing the bounds of [`splinerod_core::KnotMap::shape_error`]);
+//! never below `min_control_points`; never a cut knot; and
+//! hysteresis: a knot inserted is not removed during the next `hysteresis_steps` adapt
+//! steps, so nothing oscillates. Every applied map is reported through a callback, so
+//! energies with per-coefficient caches can follow (`Energy::on_knot_change`) without
+//! this crate knowing about them.
+
+use crate::{AdaptError, Refinement, RefinementCriterion};
+use splinerod_core::{KnotMap, Real, Rod};
+
+/// Limits of the adapt step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptParams {
+    /// Never more control points than this.
+    pub max_control_points: usize,
+    /// Never fewer control points than this (removals stop there).
+    pub min_control_points: usize,
+    /// Never a knot span shorter than this (m of rest arclength).
+    pub min_span: Real,
+    /// Largest curve displacement a removal may cause (m).
+    pub shape_tolerance: Real,
+    /// Adapt steps during which a freshly inserted knot may not be removed.
+    pub hysteresis_steps: usize,
+    /// Most insertion rounds per adapt step (each round re-evaluates the criteria).
+    pub max_rounds: usize,
+}
+
+impl Default for AdaptParams {
+    fn default() -> Self {
+        Self {
+            max_control_points: 200,
+            min_control_points: 4,
+            min_span: 1e-3,
+            shape_tolerance: 1e-6,
+            hysteresis_steps: 10,
+            max_rounds: 4,
+        }
+    }
+}
+
+impl AdaptParams {
+    /// Checks the ranges.
+    pub fn validate(&self) -> Result<(), AdaptError> {
+        crate::error::positive("min_span", self.min_span)?;
+        crate::error::positive("shape_tolerance", self.shape_tolerance)?;
+        if self.min_control_points > self.max_control_points {
+            let reason = "must not exceed max_control_points";
+            return Err(AdaptError::InvalidParameter {
+                name: "min_control_points",
+                value: self.min_control_points as Real,
+                reason,
+            });
+        }
+        if self.max_rounds == 0 {
+            let reason = "must be at least 1";
+            return Err(AdaptError::InvalidParameter {
+                name: "max_rounds",
+                value: 0.0,
+                reason,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What one adapt step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct AdaptReport {
+    /// Knots inserted.
+    pub inserted: usize,
+    /// Knots removed.
+    pub removed: usize,
+}
+
+/// Criteria, limits and the memory (hysteresis) of the adapt step.
+pub struct Adapter {
+    /// Limits.
+    pub params: AdaptParams,
+    /// The criteria consulted, in order.
+    pub criteria: Vec<Box<dyn RefinementCriterion>>,
+    /// Recently inserted knot values and the adapt steps they stay protected.
+    protected: Vec<(Real, usize)>,
+    marks: Vec<Refinement>,
+}
+
+impl std::fmt::Debug for Adapter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = self.criteria.iter().map(|c| c.name()).collect();
+        f.debug_struct("Adapter")
+            .field("params", &self.params)
+            .field("criteria", &names)
+            .field("protected", &self.protected)
+            .finish()
+    }
+}
+
+impl Adapter {
+    /// An adapter with the given limits and no criteria.
+    pub fn new(params: AdaptParams) -> Result<Self, AdaptError> {
+        params.validate()?;
+        Ok(Self {
+            params,
+            criteria: Vec::new(),
+            protected: Vec::new(),
+            marks: Vec::new(),
+        })
+    }
+
+    /// Adds a criterion.
+    pub fn with(mut self, criterion: impl RefinementCriterion + 'static) -> Self {
+        self.criteria.push(Box::new(criterion));
+        self
+    }
+
+    /// Runs the adapt step on `rod`; `interactions` are the material coordinates where
+    /// something acts on it; `on_change` sees the rod after every applied map.
+    pub fn adapt(
+        &mut self,
+        rod: &mut Rod,
+        interactions: &[Real],
+        on_change: &mut dyn FnMut(&Rod, &KnotMap),
+    ) -> Result<AdaptReport, AdaptError> {
+        self.protected.retain_mut(|(_, steps)| {
+            *steps = steps.saturating_sub(1);
+            *steps > 0
+        });
+        let mut report = AdaptReport::default();
+        for _ in 0..self.params.max_rounds {
+            let inserted = self.insert_round(rod, interactions, on_change)?;
+            report.inserted += inserted;
+            if inserted == 0 {
+                break;
+            }
+        }
+        report.removed = self.remove_round(rod, interactions, on_change)?;
+        Ok(report)
+    }
+
+    fn collect(&mut self, rod: &Rod, interactions: &[Real]) {
+        self.marks.clear();
+        for c in &self.criteria {
+            c.mark(rod, interactions, &mut self.marks);
+        }
+    }
+
+    fn insert_round(
+        &mut self,
+        rod: &mut Rod,
+        interactions: &[Real],
+        on_change: &mut dyn FnMut(&Rod, &KnotMap),
+    ) -> Result<usize, AdaptError> {
+        self.collect(rod, interactions);
+        let mut count = 0;
+        for m in std::mem::take(&mut self.marks) {
+            let Refinement::Insert { at } = m else {
+                continue;
+            };
+            if rod.len() >= self.params.max_control_points || !self.room_for(rod, at) {
+                continue;
+            }
+            let map = rod.insert_knot(at)?;
+            on_change(rod, &map);
+            self.protected.push((at, self.params.hysteresis_steps + 1));
+            count += 1;
+        }
+        Ok(count)
+    }
+
+    /// Whether inserting `at` leaves both halves of its span at least `min_span` long.
+    fn room_for(&self, rod: &Rod, at: Real) -> bool {
+        let knots = rod.basis().knots();
+        let i = knots.partition_point(|&t| t <= at);
+        let (Some(&right), Some(&left)) = (knots.get(i), i.checked_sub(1).map(|j| &knots[j]))
+        else {
+            return false;
+        };
+        at - left >= self.params.min_span && right - at >= self.params.min_span
+    }
+
+    fn remove_round(
+        &mut self,
+        rod: &mut Rod,
+        interactions: &[Real],
+        on_change: &mut dyn FnMut(&Rod, &KnotMap),
+    ) -> Result<usize, AdaptError> {
+        self.collect(rod, interactions);
+        let mut knots: Vec<usize> = self
+            .marks
+            .iter()
+            .filter_map(|m| match m {
+                Refinement::Remove { knot } => Some(*knot),
+                Refinement::Insert { .. } => None,
+            })
+            .collect();
+        // Highest index first, so the indices still to visit stay valid.
+        knots.sort_unstable_by(|a, b| b.cmp(a));
+        knots.dedup();
+        // The removals of one adapt step share the tolerance: together they move the
+        // curve by at most `shape_tolerance`.
+        let mut budget = self.params.shape_tolerance;
+        let mut count = 0;
+        for k in knots {
+            if rod.len() <= self.params.min_control_points {
+                break;
+            }
+            if !self.removable(rod, interactions, k) {
+                continue;
+            }
+            let error = rod.basis().removal(k)?.shape_error(&rod.positions);
+            if error.is_nan() || error > budget {
+                continue;
+            }
+            let map = rod.remove_knot(k, budget)?;
+            on_change(rod, &map);
+            budget -= error;
+            count += 1;
+        }
+        Ok(count)
+    }
+
+    fn removable(&self, rod: &Rod, interactions: &[Real], k: usize) -> bool {
+        let Some(&value) = rod.basis().knots().get(k) else {
+            return false;
+        };
+        !rod.is_cut_knot(k)
+            && !self.protected.iter().any(|&(v, _)| v == value)
+            && !self
+                .criteria
+                .iter()
+                .any(|c| c.vetoes_removal(rod, interactions, value))
+    }
+}
