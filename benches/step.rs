@@ -64,15 +64,10 @@ fn implicit_euler_step(c: &mut Criterion) {
 }
 
 fn static_solve(c: &mut Criterion) {
-    let system = cable(16, 0.8);
     let mut solver = StaticSolver::new(StaticParams::default()).unwrap();
     c.bench_function("static_solve_16", |b| {
         b.iter_batched_ref(
-            || RodSystem {
-                rod: system.rod.clone(),
-                pins: system.pins.clone(),
-                energies: cable(16, 0.8).energies,
-            },
+            || cable(16, 0.8),
             |s| solver.solve(s).unwrap(),
             criterion::BatchSize::SmallInput,
         )

@@ -2,8 +2,9 @@
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
 use crate::scene::{KnotsSpec, Method, Scene};
-use crate::{Error, RodSystem, Simulation};
+use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
+use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
 use splinerod_energies::{Gravity, Stretching};
 use splinerod_integrators::{ImplicitEuler, NewtonParams, StaticParams};
@@ -93,7 +94,34 @@ impl Scene {
             }
             system = system.with_pin(pin);
         }
+        for g in &self.grabs {
+            let times = (g.start_time, g.end_time);
+            let grab = Grab::new(g.at * l, Vector3::from(g.to), times, g.stiffness)?;
+            system = system.with_grab(grab);
+        }
         Ok(system)
+    }
+
+    /// The adapt step of `[adaptivity]`, if enabled: curvature and interaction criteria.
+    pub fn adapter(&self) -> Result<Option<Adapter>, Error> {
+        let Some(a) = self.adaptivity.as_ref().filter(|a| a.enabled) else {
+            return Ok(None);
+        };
+        let l = self.rod.rest_length;
+        let params = AdaptParams {
+            max_control_points: a.max_control_points,
+            min_control_points: a.min_control_points.unwrap_or(self.rod.control_points),
+            min_span: a.min_span * l,
+            shape_tolerance: a.shape_tolerance,
+            hysteresis_steps: a.hysteresis_steps,
+            ..AdaptParams::default()
+        };
+        let curvature = CurvatureCriterion::new(a.insert_threshold, a.remove_threshold)?;
+        let interaction = InteractionCriterion::new(a.interaction_radius * l)?
+            .with_multiplicity(a.interaction_multiplicity)?;
+        Ok(Some(
+            Adapter::new(params)?.with(interaction).with(curvature),
+        ))
     }
 
     /// Newton settings of `[solver]` for time stepping.
@@ -118,7 +146,9 @@ impl Scene {
     /// A time-stepping simulation of the scene (implicit Euler).
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = Box::new(ImplicitEuler::new(self.newton_params())?);
-        Ok(Simulation::new(self.build_system()?, integrator))
+        let mut sim = Simulation::new(self.build_system()?, integrator);
+        sim.adapter = self.adapter()?;
+        Ok(sim)
     }
 
     /// Number of steps of `dt` covering `duration` (the last step ends at or just past it).

@@ -1,5 +1,6 @@
 //! The facade's error: every lower crate's error, plus scene and I/O errors.
 
+use splinerod_adaptivity::AdaptError;
 use splinerod_core::CoreError;
 use splinerod_integrators::IntegratorError;
 
@@ -34,6 +35,9 @@ pub enum Error {
     /// From an integrator or solver.
     #[error(transparent)]
     Integrator(#[from] IntegratorError),
+    /// From the adaptivity crate.
+    #[error(transparent)]
+    Adapt(#[from] AdaptError),
 }
 
 impl Error {

@@ -35,12 +35,15 @@
 
 mod build;
 mod error;
+mod grab;
 pub mod runner;
 pub mod scene;
+mod scene_adapt;
 mod simulation;
 mod system;
 
 pub use error::Error;
+pub use grab::Grab;
 pub use runner::{run, RunResult};
 pub use scene::Scene;
 pub use simulation::{Simulation, StepReport};

@@ -64,8 +64,44 @@ pub struct RunResult {
     pub knots: Vec<Real>,
     /// Solver counters.
     pub solver: SolverTotals,
-    /// Forces the pins exert on the rod at the end, N.
+    /// Forces the pins exert on the rod at the end, N (static solves only).
     pub pin_forces: Vec<[Real; 3]>,
+    /// Mechanically independent pieces at the end (1 + the number of cuts).
+    pub pieces: usize,
+    /// `[t, n]`: the initial number of control points and every change of it.
+    pub control_points_history: Vec<[Real; 2]>,
+}
+
+/// What a run accumulated besides the final state.
+struct Tally {
+    time: Real,
+    steps: usize,
+    wall: Real,
+    solver: SolverTotals,
+    probes: Vec<Probe>,
+    pin_forces: Vec<Vector3<Real>>,
+    history: Vec<[Real; 2]>,
+}
+
+impl Tally {
+    fn new(system: &RodSystem, probes: Vec<Probe>) -> Self {
+        Self {
+            time: 0.0,
+            steps: 0,
+            wall: 0.0,
+            solver: SolverTotals::default(),
+            probes,
+            pin_forces: Vec::new(),
+            history: vec![[0.0, system.rod.len() as Real]],
+        }
+    }
+
+    /// Records the control-point count at time `t` if it changed.
+    fn count(&mut self, t: Real, n: usize) {
+        if self.history.last().is_some_and(|h| h[1] != n as Real) {
+            self.history.push([t, n as Real]);
+        }
+    }
 }
 
 /// Runs `scene` to its end.
@@ -78,48 +114,60 @@ pub fn run(scene: &Scene) -> Result<RunResult, Error> {
 
 fn run_static(scene: &Scene) -> Result<RunResult, Error> {
     let mut system = scene.build_system()?;
+    let l = scene.rod.rest_length;
+    for cut in &scene.cuts {
+        system.rod.cut(cut.at * l)?;
+    }
+    // Grabs pull to their final targets.
+    system.time = scene.grabs.iter().map(|g| g.end_time).fold(0.0, Real::max);
+    let (t, RodSystem { rod, grabs, .. }) = (system.time, &mut system);
+    for g in grabs.iter_mut() {
+        g.update(t, rod)?;
+    }
+    let mut tally = Tally::new(&system, probes_at_start(scene, &system)?);
     let mut solver = StaticSolver::new(scene.static_params())?;
     let start = Instant::now();
     let stats = solver.solve(&mut system)?;
-    let wall = start.elapsed().as_secs_f64();
-    let totals = SolverTotals {
+    tally.wall = start.elapsed().as_secs_f64();
+    tally.solver = SolverTotals {
         newton_iterations: stats.newton_iterations,
         symbolic_analyses: stats.symbolic_analyses,
         line_search_cuts: stats.line_search_cuts,
         unconverged_steps: 0,
     };
-    let forces = solver.pin_forces().to_vec();
-    let probes = probes_at_start(scene, &system)?;
-    finish(scene, &system, (0.0, 0, wall), totals, probes, &forces)
+    tally.pin_forces = solver.pin_forces().to_vec();
+    finish(scene, &system, tally)
 }
 
 fn run_dynamic(scene: &Scene) -> Result<RunResult, Error> {
     let mut sim = scene.build()?;
     let dt = scene.solver.dt.unwrap_or_default();
-    let mut probes = probes_at_start(scene, &sim.system)?;
-    let mut totals = SolverTotals::default();
+    let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
+    let mut cuts: Vec<_> = scene.cuts.iter().map(|c| (c.time, c.at)).collect();
+    cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut next_cut = 0;
     let start = Instant::now();
     for _ in 0..scene.step_count() {
         let report = sim.step(dt)?;
+        let totals = &mut tally.solver;
         totals.newton_iterations += report.solver.newton_iterations;
         totals.symbolic_analyses += report.solver.symbolic_analyses;
         totals.line_search_cuts += report.solver.line_search_cuts;
         totals.unconverged_steps += usize::from(!report.solver.converged);
-        for probe in &mut probes {
+        while next_cut < cuts.len() && cuts[next_cut].0 <= sim.time + 1e-9 * dt {
+            sim.cut(scene.material_coordinate(cuts[next_cut].1))?;
+            next_cut += 1;
+        }
+        tally.count(sim.time, sim.system.rod.len());
+        for probe in &mut tally.probes {
             probe.t.push(sim.time);
             let p = sim.system.rod.point(scene.material_coordinate(probe.s))?;
             probe.positions.push(p.into());
         }
     }
-    let wall = start.elapsed().as_secs_f64();
-    finish(
-        scene,
-        &sim.system,
-        (sim.time, sim.steps, wall),
-        totals,
-        probes,
-        &[],
-    )
+    tally.wall = start.elapsed().as_secs_f64();
+    (tally.time, tally.steps) = (sim.time, sim.steps);
+    finish(scene, &sim.system, tally)
 }
 
 fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
@@ -138,14 +186,7 @@ fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Erro
         .collect()
 }
 
-fn finish(
-    scene: &Scene,
-    system: &RodSystem,
-    (time, steps, wall_seconds): (Real, usize, Real),
-    solver: SolverTotals,
-    probes: Vec<Probe>,
-    pin_forces: &[Vector3<Real>],
-) -> Result<RunResult, Error> {
+fn finish(scene: &Scene, system: &RodSystem, tally: Tally) -> Result<RunResult, Error> {
     let rod = &system.rod;
     let m = scene.output.samples;
     let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
@@ -157,16 +198,18 @@ fn finish(
     energy.extend(system.energy_breakdown());
     let l = rod.material().rest_length;
     Ok(RunResult {
-        time,
-        steps,
+        time: tally.time,
+        steps: tally.steps,
         control_points: rod.len(),
-        wall_seconds,
+        wall_seconds: tally.wall,
         samples: Samples { s, positions },
-        probes,
+        probes: tally.probes,
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
-        solver,
-        pin_forces: pin_forces.iter().map(|f| (*f).into()).collect(),
+        solver: tally.solver,
+        pin_forces: tally.pin_forces.iter().map(|f| (*f).into()).collect(),
+        pieces: rod.pieces(),
+        control_points_history: tally.history,
     })
 }
 
@@ -187,6 +230,17 @@ impl RunResult {
             .map(|(k, v)| format!("{k} {v:.6e}"))
             .collect();
         out.push_str(&format!("energy (J): {}\n", energies.join(", ")));
+        if self.control_points_history.len() > 1 {
+            let counts = self.control_points_history.iter().map(|h| h[1] as usize);
+            let (lo, hi) = counts.fold((usize::MAX, 0), |(a, b), n| (a.min(n), b.max(n)));
+            out.push_str(&format!(
+                "adaptivity: {} changes, {lo} to {hi} control points\n",
+                self.control_points_history.len() - 1
+            ));
+        }
+        if self.pieces > 1 {
+            out.push_str(&format!("{} pieces after cutting\n", self.pieces));
+        }
         if self.solver.unconverged_steps > 0 {
             out.push_str(&format!(
                 "note: {} steps stopped at the Newton iteration limit\n",

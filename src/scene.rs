@@ -5,6 +5,7 @@
 //! Unknown fields are rejected, missing ones named by the parser, and every value is
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
+pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 use crate::Error;
 use serde::Deserialize;
 
@@ -25,6 +26,14 @@ pub struct Scene {
     /// What to report.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Adaptive resolution; absent: the basis never changes.
+    pub adaptivity: Option<AdaptivitySpec>,
+    /// Grabs: material points pulled along a path.
+    #[serde(default)]
+    pub grabs: Vec<GrabSpec>,
+    /// Cuts at given times.
+    #[serde(default)]
+    pub cuts: Vec<CutSpec>,
 }
 
 /// `[rod]`.
@@ -230,7 +239,12 @@ impl Scene {
         for (i, &p) in self.output.probes.iter().enumerate() {
             fraction(&format!("output.probes[{i}]"), p)?;
         }
-        Ok(())
+        crate::scene_adapt::validate(
+            self.adaptivity.as_ref(),
+            &self.grabs,
+            &self.cuts,
+            self.rod.control_points,
+        )
     }
 
     fn validate_shape(&self) -> Result<(), Error> {
@@ -355,7 +369,7 @@ fn parse_error(text: &str, e: &toml::de::Error) -> Error {
     }
 }
 
-fn positive(field: &str, v: f64) -> Result<(), Error> {
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), Error> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
@@ -363,7 +377,7 @@ fn positive(field: &str, v: f64) -> Result<(), Error> {
     }
 }
 
-fn non_negative(field: &str, v: f64) -> Result<(), Error> {
+pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), Error> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
@@ -371,7 +385,7 @@ fn non_negative(field: &str, v: f64) -> Result<(), Error> {
     }
 }
 
-fn fraction(field: &str, v: f64) -> Result<(), Error> {
+pub(crate) fn fraction(field: &str, v: f64) -> Result<(), Error> {
     if (0.0..=1.0).contains(&v) {
         Ok(())
     } else {
@@ -383,7 +397,7 @@ fn fraction(field: &str, v: f64) -> Result<(), Error> {
     }
 }
 
-fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
+pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {

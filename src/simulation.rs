@@ -1,11 +1,15 @@
-//! [`Simulation`]: a [`RodSystem`] advanced by a boxed [`Integrator`].
+//! [`Simulation`]: a [`RodSystem`] advanced by a boxed [`Integrator`], with optional
+//! adaptive resolution.
 //!
-//! One step is a short list of named, timed stages: integrate (forces, Jacobians, one
-//! sparse solve per Newton iteration), then bookkeeping. Adaptivity plugs in after
-//! integration (paper §4.1) once its criteria are configured.
+//! One step (paper §4.1): move the grabs' targets to the end of the step, integrate
+//! (forces, Jacobians, one sparse solve per Newton iteration), then adapt — insert and
+//! remove knots through the exact maps, telling every energy about each map — and
+//! record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
 
 use crate::{Error, RodSystem};
-use splinerod_core::Real;
+use splinerod_adaptivity::{AdaptReport, Adapter};
+use splinerod_core::{KnotMap, Real, Rod};
+use splinerod_energies::Energy;
 use splinerod_integrators::{Integrator, StepStats};
 use std::time::Instant;
 
@@ -14,47 +18,99 @@ use std::time::Instant;
 pub struct StepReport {
     /// Solver counters of the integration stage.
     pub solver: StepStats,
+    /// Knots inserted and removed by the adapt stage.
+    pub adapt: AdaptReport,
     /// Control points after the step.
     pub control_points: usize,
     /// Wall time of the integration stage, s.
     pub integrate_seconds: Real,
 }
 
-/// A rod system and the integrator that advances it.
+/// A rod system, the integrator that advances it and, optionally, the adapt step.
 pub struct Simulation {
     /// The mechanical state.
     pub system: RodSystem,
     /// The time integrator (swap it freely between steps).
     pub integrator: Box<dyn Integrator>,
+    /// Adaptive resolution after each step; `None` keeps the basis fixed.
+    pub adapter: Option<Adapter>,
     /// Simulated time, s.
     pub time: Real,
     /// Steps taken.
     pub steps: usize,
+    interactions: Vec<Real>,
 }
 
 impl Simulation {
-    /// A simulation at time zero.
+    /// A simulation at time zero, without adaptivity.
     pub fn new(system: RodSystem, integrator: Box<dyn Integrator>) -> Self {
         Self {
             system,
             integrator,
+            adapter: None,
             time: 0.0,
             steps: 0,
+            interactions: Vec::new(),
         }
     }
 
-    /// Advances by `dt`. On error the state is unchanged and time does not advance.
+    /// Adds adaptive resolution (builder style).
+    pub fn with_adapter(mut self, adapter: Adapter) -> Self {
+        self.adapter = Some(adapter);
+        self
+    }
+
+    /// Advances by `dt`. On an integration error the state is unchanged and time does
+    /// not advance.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
         let start = Instant::now();
-        let solver = self.integrator.step(&mut self.system, dt)?;
+        let end = self.time + dt;
+        let saved_time = self.system.time;
+        self.system.time = end;
+        let updated = self
+            .system
+            .grabs
+            .iter_mut()
+            .try_for_each(|g| g.update(end, &self.system.rod));
+        let solver = updated.and_then(|_| Ok(self.integrator.step(&mut self.system, dt)?));
+        let solver = solver.inspect_err(|_| self.system.time = saved_time)?;
         let integrate_seconds = start.elapsed().as_secs_f64();
-        self.time += dt;
+        self.time = end;
         self.steps += 1;
+        let adapt = self.adapt()?;
         Ok(StepReport {
             solver,
+            adapt,
             control_points: self.system.rod.len(),
             integrate_seconds,
         })
+    }
+
+    /// Runs the adapt step now (no-op without an adapter).
+    pub fn adapt(&mut self) -> Result<AdaptReport, Error> {
+        let Some(adapter) = self.adapter.as_mut() else {
+            return Ok(AdaptReport::default());
+        };
+        self.interactions.clear();
+        let t = self.system.time;
+        let grabs = self.system.grabs.iter().filter(|g| g.active(t));
+        self.interactions.extend(grabs.map(|g| g.spring.at));
+        let RodSystem { rod, energies, .. } = &mut self.system;
+        let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
+        Ok(adapter.adapt(rod, &self.interactions, &mut follow)?)
+    }
+
+    /// Cuts the rod at material coordinate `s` (m; see [`Rod::cut`]).
+    pub fn cut(&mut self, s: Real) -> Result<(), Error> {
+        let RodSystem { rod, energies, .. } = &mut self.system;
+        rod.cut_with(s, &mut |rod, map| notify(energies, rod, map))?;
+        Ok(())
+    }
+}
+
+fn notify(energies: &mut [Box<dyn Energy>], rod: &Rod, map: &KnotMap) {
+    for e in energies.iter_mut() {
+        e.on_knot_change(rod, map);
     }
 }
 
@@ -62,6 +118,7 @@ impl std::fmt::Debug for Simulation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Simulation")
             .field("integrator", &self.integrator.name())
+            .field("adapter", &self.adapter)
             .field("time", &self.time)
             .field("steps", &self.steps)
             .field("system", &self.system)

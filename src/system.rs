@@ -1,6 +1,8 @@
-//! [`RodSystem`]: a rod, its pins and its energies; the facade's implementation of the
-//! integrators' [`System`] view (the sum of all energies).
+//! [`RodSystem`]: a rod, its pins, its energies and its grabs; the facade's
+//! implementation of the integrators' [`System`] view (the sum of all energies and of
+//! the active grabs' springs).
 
+use crate::Grab;
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
 use splinerod_energies::Energy;
@@ -14,6 +16,10 @@ pub struct RodSystem {
     pub pins: Vec<Pin>,
     /// Potential energies (stretching, gravity, ...), summed.
     pub energies: Vec<Box<dyn Energy>>,
+    /// Grabs; only the active ones (see [`Grab::active`]) pull.
+    pub grabs: Vec<Grab>,
+    /// Simulated time the grabs are evaluated at (the end of the step being solved).
+    pub time: Real,
 }
 
 impl RodSystem {
@@ -23,6 +29,8 @@ impl RodSystem {
             rod,
             pins: Vec::new(),
             energies: Vec::new(),
+            grabs: Vec::new(),
+            time: 0.0,
         }
     }
 
@@ -38,12 +46,40 @@ impl RodSystem {
         self
     }
 
-    /// Each energy's name and value, in order.
-    pub fn energy_breakdown(&self) -> Vec<(String, Real)> {
+    /// Adds a grab (builder style).
+    pub fn with_grab(mut self, grab: Grab) -> Self {
+        self.grabs.push(grab);
+        self
+    }
+
+    /// The springs of the grabs active at [`time`](Self::time).
+    pub fn active_grabs(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
+        self.grabs
+            .iter()
+            .filter(|g| g.active(self.time))
+            .map(|g| &g.spring as &dyn Energy)
+    }
+
+    /// Every energy acting now: the energies, then the active grabs.
+    fn acting(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
         self.energies
             .iter()
-            .map(|e| (e.name().to_string(), e.energy(&self.rod)))
-            .collect()
+            .map(|e| e.as_ref())
+            .chain(self.active_grabs())
+    }
+
+    /// Each acting energy's name and value, in order; terms sharing a name (several
+    /// grabs) are summed.
+    pub fn energy_breakdown(&self) -> Vec<(String, Real)> {
+        let mut out: Vec<(String, Real)> = Vec::new();
+        for e in self.acting() {
+            let value = e.energy(&self.rod);
+            match out.iter_mut().find(|(name, _)| name == e.name()) {
+                Some((_, total)) => *total += value,
+                None => out.push((e.name().to_string(), value)),
+            }
+        }
+        out
     }
 }
 
@@ -54,6 +90,7 @@ impl std::fmt::Debug for RodSystem {
             .field("rod", &self.rod)
             .field("pins", &self.pins)
             .field("energies", &names)
+            .field("grabs", &self.grabs)
             .finish()
     }
 }
@@ -69,15 +106,15 @@ impl System for RodSystem {
         &self.pins
     }
     fn potential_energy(&self) -> Real {
-        self.energies.iter().map(|e| e.energy(&self.rod)).sum()
+        self.acting().map(|e| e.energy(&self.rod)).sum()
     }
     fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]) {
-        for e in &self.energies {
+        for e in self.acting() {
             e.add_gradient(&self.rod, gradient);
         }
     }
     fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded) {
-        for e in &self.energies {
+        for e in self.acting() {
             e.add_hessian(&self.rod, kind, hessian);
         }
     }

@@ -156,11 +156,14 @@ impl Adapter {
     ) -> Result<usize, AdaptError> {
         self.collect(rod, interactions);
         let mut count = 0;
-        for m in std::mem::take(&mut self.marks) {
-            let Refinement::Insert { at } = m else {
+        let marks = std::mem::take(&mut self.marks);
+        for (k, m) in marks.iter().enumerate() {
+            let Refinement::Insert { at } = *m else {
                 continue;
             };
-            if rod.len() >= self.params.max_control_points || !self.room_for(rod, at) {
+            // One insertion per value and round (criteria may agree on a place).
+            let repeated = marks[..k].contains(m);
+            if repeated || rod.len() >= self.params.max_control_points || !self.room_for(rod, at) {
                 continue;
             }
             let map = rod.insert_knot(at)?;
@@ -168,10 +171,12 @@ impl Adapter {
             self.protected.push((at, self.params.hysteresis_steps + 1));
             count += 1;
         }
+        self.marks = marks;
         Ok(count)
     }
 
-    /// Whether inserting `at` leaves both halves of its span at least `min_span` long.
+    /// Whether inserting `at` leaves both halves of its span at least `min_span` long
+    /// (repeating an existing knot makes no new span and is always allowed).
     fn room_for(&self, rod: &Rod, at: Real) -> bool {
         let knots = rod.basis().knots();
         let i = knots.partition_point(|&t| t <= at);
@@ -179,7 +184,7 @@ impl Adapter {
         else {
             return false;
         };
-        at - left >= self.params.min_span && right - at >= self.params.min_span
+        left == at || (at - left >= self.params.min_span && right - at >= self.params.min_span)
     }
 
     fn remove_round(

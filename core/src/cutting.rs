@@ -7,10 +7,19 @@ use crate::{CoreError, KnotMap, Real, Rod};
 
 impl Rod {
     /// Cuts the rod at material coordinate `s` (strictly inside `(0, L)`) by exact knot
-    /// insertions until `s` has multiplicity `degree + 1`; returns the maps applied, in
-    /// order, so that cached per-coefficient data can follow. Errors, changing nothing,
-    /// if `s` is outside the rod or already a cut.
-    pub fn cut(&mut self, s: Real) -> Result<Vec<KnotMap>, CoreError> {
+    /// insertions until `s` has multiplicity `degree + 1`; returns the number of
+    /// insertions. Errors, changing nothing, if `s` is outside the rod or already a cut.
+    pub fn cut(&mut self, s: Real) -> Result<usize, CoreError> {
+        self.cut_with(s, &mut |_, _| {})
+    }
+
+    /// [`cut`](Self::cut), calling `on_change` with the rod after each insertion's map
+    /// (for data that must follow the basis, e.g. energies' caches).
+    pub fn cut_with(
+        &mut self,
+        s: Real,
+        on_change: &mut dyn FnMut(&Rod, &KnotMap),
+    ) -> Result<usize, CoreError> {
         let d = self.basis().degree();
         let (start, end) = self.basis().domain();
         if !(s > start && s < end) {
@@ -24,7 +33,11 @@ impl Rod {
                 max: d + 1,
             });
         }
-        (present..=d).map(|_| self.insert_knot(s)).collect()
+        for _ in present..=d {
+            let map = self.insert_knot(s)?;
+            on_change(self, &map);
+        }
+        Ok(d + 1 - present)
     }
 
     /// Multiplicity of the value `s` in the knot vector (O(log n): knots are sorted).
