@@ -234,7 +234,7 @@ impl RunResult {
             let counts = self.control_points_history.iter().map(|h| h[1] as usize);
             let (lo, hi) = counts.fold((usize::MAX, 0), |(a, b), n| (a.min(n), b.max(n)));
             out.push_str(&format!(
-                "adaptivity: {} changes, {lo} to {hi} control points\n",
+                "resolution: {} changes, {lo} to {hi} control points\n",
                 self.control_points_history.len() - 1
             ));
         }
