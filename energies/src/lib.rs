@@ -1,13 +1,16 @@
 //! # splinerod-energies
 //!
 //! Potential energies of a rod, as functions of its control points, through one small
-//! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12)
-//! uniform [`Gravity`] and the [`PointSpring`] of a grab. The [`conformance`] module checks any energy (gradient and
+//! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12),
+//! [`Bending`] with the exact nonlinear curvature, a penalty [`Clamp`] on the tangent
+//! direction at a material point, uniform [`Gravity`] and the [`PointSpring`] of a grab.
+//! The [`conformance`] module checks any energy (gradient and
 //! Hessian against finite differences, symmetry, definiteness, invariances).
 //!
 //! Energies are integrals over the rest arclength `s`, evaluated with the rod's cached
 //! quadrature table; their cost is O(n) in control points and they do not depend on the
-//! knots, so knot insertion leaves them unchanged.
+//! knots, so knot insertion leaves them unchanged (exactly for polynomial integrands, up
+//! to the quadrature error for bending's rational κ²).
 //!
 //! ```
 //! use splinerod_core::{BSplineSpace, Material, Rod};
@@ -27,12 +30,16 @@
 //! ```
 #![warn(missing_docs)]
 
+mod bending;
+mod clamp;
 pub mod conformance;
 mod energy;
 mod gravity;
 mod point_spring;
 mod stretching;
 
+pub use bending::{Bending, STRETCH_FLOOR};
+pub use clamp::Clamp;
 pub use energy::{finite_difference_hessian, Energy};
 pub use gravity::Gravity;
 pub use point_spring::PointSpring;

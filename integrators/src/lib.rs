@@ -1,9 +1,11 @@
 //! # splinerod-integrators
 //!
 //! Time integrators and solvers for a rod with energies and pins, seen through the small
-//! [`System`] view: [`ImplicitEuler`] (an [`Integrator`]), the [`StaticSolver`] for
-//! equilibria, and [`modal::modes`] for natural frequencies. Newton's method
-//! ([`newton`]) and the sparse Cholesky solve ([`linear`]) are shared by all of them.
+//! [`System`] view: three [`Integrator`]s — [`ImplicitEuler`] (first order, dissipative),
+//! [`ImplicitMidpoint`] (second order, symplectic) and [`Bdf2`] (second order,
+//! dissipative) — the [`StaticSolver`] for equilibria, and [`modal::modes`] for natural
+//! frequencies. Newton's method ([`newton`]) and the sparse Cholesky solve ([`linear`])
+//! are shared by all of them; the [`conformance`] suite checks any integrator.
 //!
 //! Equations of motion, with mass matrix `M`, potential `E` (elastic + gravity),
 //! mass-proportional damping `α` and pins \\(G q = p\\) enforced by multipliers `λ`:
@@ -23,17 +25,23 @@
 //! ```
 #![warn(missing_docs)]
 
+mod bdf2;
+pub mod conformance;
 mod error;
 mod implicit_euler;
+mod incremental;
 mod kkt;
 pub mod linear;
+mod midpoint;
 pub mod modal;
 pub mod newton;
 mod point_pins;
 mod statics;
 
+pub use bdf2::Bdf2;
 pub use error::IntegratorError;
 pub use implicit_euler::ImplicitEuler;
+pub use midpoint::ImplicitMidpoint;
 pub use newton::NewtonParams;
 pub use statics::{StaticParams, StaticSolver};
 

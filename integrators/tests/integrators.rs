@@ -3,125 +3,21 @@
 //! between pins is a parabola (exactly representable by cubics) and whose pinned modes
 //! are \\(\omega_j = j\pi/L\,\sqrt{k/\mu}\\).
 
-use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Pin, Real, Rod};
+use nalgebra::Vector3;
+use splinerod_core::{Pin, Real};
 use splinerod_integrators::{
     modal, ImplicitEuler, Integrator, IntegratorError, NewtonParams, StaticParams, StaticSolver,
     System,
 };
 
-struct Quadratic {
-    rod: Rod,
-    pins: Vec<Pin>,
-    k: Real,
-    g: Vector3<Real>,
-    poison: bool,
-}
-
-impl Quadratic {
-    fn new(n: usize, k: Real, g: Vector3<Real>) -> Self {
-        let material = Material {
-            rest_length: 2.0,
-            linear_density: 0.5,
-        };
-        let basis = BSplineSpace::clamped_uniform(3, n, 2.0).unwrap();
-        let rod = Rod::straight(
-            material,
-            Box::new(basis),
-            Vector3::zeros(),
-            Vector3::new(2.0, 0.0, 0.0),
-        )
-        .unwrap();
-        Self {
-            rod,
-            pins: Vec::new(),
-            k,
-            g,
-            poison: false,
-        }
-    }
-    fn pin_ends(mut self) -> Self {
-        self.pins = vec![
-            Pin::here(&self.rod, 0.0).unwrap(),
-            Pin::here(&self.rod, 2.0).unwrap(),
-        ];
-        self
-    }
-}
-
-impl System for Quadratic {
-    fn rod(&self) -> &Rod {
-        &self.rod
-    }
-    fn rod_mut(&mut self) -> &mut Rod {
-        &mut self.rod
-    }
-    fn pins(&self) -> &[Pin] {
-        &self.pins
-    }
-    fn potential_energy(&self) -> Real {
-        let q = &self.rod.positions;
-        let elastic: Real = self
-            .rod
-            .quadrature()
-            .points()
-            .map(|p| {
-                let c1: Vector3<Real> =
-                    p.d1.iter()
-                        .enumerate()
-                        .map(|(a, w)| q[p.first + a] * *w)
-                        .sum();
-                0.5 * self.k * p.weight * c1.norm_squared()
-            })
-            .sum();
-        let gravity: Real = self
-            .rod
-            .lumped_masses()
-            .iter()
-            .zip(q)
-            .map(|(m, x)| m * self.g.dot(x))
-            .sum();
-        elastic - gravity
-    }
-    fn add_potential_gradient(&self, g: &mut [Vector3<Real>]) {
-        let q = &self.rod.positions;
-        for p in self.rod.quadrature().points() {
-            let c1: Vector3<Real> =
-                p.d1.iter()
-                    .enumerate()
-                    .map(|(a, w)| q[p.first + a] * *w)
-                    .sum();
-            for (a, w) in p.d1.iter().enumerate() {
-                g[p.first + a] += c1 * (self.k * p.weight * w);
-            }
-        }
-        for (gi, m) in g.iter_mut().zip(self.rod.lumped_masses()) {
-            *gi -= self.g * *m;
-        }
-        if self.poison {
-            g[1].x = Real::NAN;
-        }
-    }
-    fn add_potential_hessian(&self, _kind: HessianKind, h: &mut BlockBanded) {
-        for p in self.rod.quadrature().points() {
-            for (a, wa) in p.d1.iter().enumerate() {
-                for (b, wb) in p.d1.iter().enumerate().skip(a) {
-                    h.add_block(
-                        p.first + a,
-                        p.first + b,
-                        &Matrix3::from_diagonal_element(self.k * p.weight * wa * wb),
-                    );
-                }
-            }
-        }
-    }
-}
+/// The suite's test string (quadratic energy), under its historical name here.
+use splinerod_integrators::conformance::TestString as Quadratic;
 
 #[test]
 fn free_flight_under_gravity_is_reproduced_exactly() {
     // No internal energy: implicit Euler gives v_n = v0 + n h g, q_n = q0 + n h v0 + h² g n(n+1)/2.
     let g = Vector3::new(0.3, -9.81, 0.1);
-    let mut sys = Quadratic::new(7, 0.0, g);
+    let mut sys = Quadratic::new(7, 0.0, g).unwrap();
     let v0 = Vector3::new(1.0, 2.0, -0.5);
     sys.rod.velocities.iter_mut().for_each(|v| *v = v0);
     let q0 = sys.rod.positions.clone();
@@ -139,7 +35,7 @@ fn free_flight_under_gravity_is_reproduced_exactly() {
 
 #[test]
 fn internal_forces_conserve_momentum_and_never_add_energy() {
-    let mut sys = Quadratic::new(9, 50.0, Vector3::zeros());
+    let mut sys = Quadratic::new(9, 50.0, Vector3::zeros()).unwrap();
     for (i, v) in sys.rod.velocities.iter_mut().enumerate() {
         *v = Vector3::new((i as Real).sin(), 0.5 * (i as Real).cos(), 0.2);
     }
@@ -160,7 +56,7 @@ fn static_solver_finds_the_parabola_and_pin_forces() {
     // k C'' = -μ g with C(0) = 0, C(L) = (L,0,0): C(s) = (s, μ g s (L - s) / (2k)) for g along -y.
     let (k, mu, l) = (3.0, 0.5, 2.0);
     let g = Vector3::new(0.0, -9.81, 0.0);
-    let mut sys = Quadratic::new(8, k, g).pin_ends();
+    let mut sys = Quadratic::new(8, k, g).unwrap().pin_ends().unwrap();
     let mut solver = StaticSolver::new(StaticParams::default()).unwrap();
     let stats = solver.solve(&mut sys).unwrap();
     assert!(stats.converged);
@@ -177,7 +73,7 @@ fn static_solver_finds_the_parabola_and_pin_forces() {
 
 #[test]
 fn pins_hold_their_targets_and_may_move() {
-    let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -9.81, 0.0));
+    let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -9.81, 0.0)).unwrap();
     sys.pins = vec![
         Pin::here(&sys.rod, 0.0).unwrap(),
         Pin::here(&sys.rod, 0.7).unwrap(),
@@ -196,7 +92,10 @@ fn pins_hold_their_targets_and_may_move() {
 fn modes_of_the_pinned_string() {
     // ω_j = jπ/L √(k/μ) for the continuum; cubic Galerkin with 30 control points.
     let (k, mu, l) = (4.0, 0.5, 2.0);
-    let sys = Quadratic::new(30, k, Vector3::zeros()).pin_ends();
+    let sys = Quadratic::new(30, k, Vector3::zeros())
+        .unwrap()
+        .pin_ends()
+        .unwrap();
     let modes = modal::modes(&sys, 9).unwrap();
     // Each frequency is threefold (x, y, z move independently for this energy).
     for j in 1..=3 {
@@ -215,7 +114,7 @@ fn modes_of_the_pinned_string() {
 
 #[test]
 fn a_non_finite_step_is_rolled_back() {
-    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros());
+    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros()).unwrap();
     sys.rod.velocities[3] = Vector3::new(0.0, 1.0, 0.0);
     let mut euler = ImplicitEuler::new(NewtonParams::default()).unwrap();
     euler.step(&mut sys, 0.01).unwrap();
@@ -229,7 +128,10 @@ fn a_non_finite_step_is_rolled_back() {
 
 #[test]
 fn symbolic_analysis_only_after_a_basis_change() {
-    let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -1.0, 0.0)).pin_ends();
+    let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -1.0, 0.0))
+        .unwrap()
+        .pin_ends()
+        .unwrap();
     let mut euler = ImplicitEuler::new(NewtonParams::default()).unwrap();
     assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 1);
     assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 0);
@@ -240,7 +142,7 @@ fn symbolic_analysis_only_after_a_basis_change() {
 
 #[test]
 fn bad_parameters_are_errors() {
-    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros());
+    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros()).unwrap();
     let mut euler = ImplicitEuler::new(NewtonParams::default()).unwrap();
     for dt in [0.0, -1.0, Real::NAN, Real::INFINITY] {
         assert!(matches!(
@@ -262,7 +164,7 @@ fn bad_parameters_are_errors() {
     };
     assert!(ImplicitEuler::new(bad).is_err());
     // Two pins on the same point are redundant.
-    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros());
+    let mut sys = Quadratic::new(8, 10.0, Vector3::zeros()).unwrap();
     sys.pins = vec![
         Pin::here(&sys.rod, 0.5).unwrap(),
         Pin::here(&sys.rod, 0.5).unwrap(),
@@ -280,7 +182,7 @@ fn end_pins_are_eliminated_consistently_with_interior_pins() {
     // hold, and the pin forces balance the internal and gravity forces at every control
     // point: ∇E = Σ_p G_pᵀ f_p.
     let g = Vector3::new(0.0, -9.81, 0.0);
-    let mut sys = Quadratic::new(10, 3.0, g);
+    let mut sys = Quadratic::new(10, 3.0, g).unwrap();
     sys.pins = [0.0, 0.05, 1.3, 2.0]
         .iter()
         .map(|&s| Pin::here(&sys.rod, s).unwrap())

@@ -1,0 +1,239 @@
+//! Continuous bending of an isotropic rod (no twist): with rest arclength `s`,
+//! \\(a = C'(s)\\) and \\(b = C''(s)\\), the exact curvature of the deformed centreline is
+//!
+//! \\[ \kappa^2 = \frac{|a \times b|^2}{|a|^6}, \qquad
+//! E_b = \frac{EI}{2} \int_0^L \kappa^2\, ds. \\]
+//!
+//! **Guard.** \\(|a| \to 0\\) (a collapsed centreline) would divide by zero, so the energy
+//! actually implemented is \\(\kappa^2 = N / (|a|^2 + \delta)^3\\) with
+//! \\(N = |a \times b|^2\\) and \\(\delta =\\) [`STRETCH_FLOOR`] \\(= 10^{-10}\\): a relative
+//! change of at most \\(3\delta\\) near the rest stretch \\(|a| = 1\\), finite everywhere.
+//! Gradient and Hessian are the exact derivatives of this guarded energy.
+//!
+//! **Derivatives.** With \\(g = |a|^2 + \delta\\), \\(h = g^{-3}\\) and
+//! \\(N = |a|^2 |b|^2 - (a\cdot b)^2\\):
+//! \\(N_a = 2|b|^2 a - 2(a\cdot b) b\\), \\(N_b = 2|a|^2 b - 2(a\cdot b) a\\),
+//! \\(N_{aa} = 2(|b|^2 I - b b^T)\\), \\(N_{bb} = 2(|a|^2 I - a a^T)\\),
+//! \\(N_{ab} = 4 a b^T - 2 b a^T - 2(a\cdot b) I\\), \\(h_a = -6 g^{-4} a\\),
+//! \\(h_{aa} = -6 g^{-4} I + 48 g^{-5} a a^T\\); then for \\(f = N h\\):
+//! \\(f_a = N_a h + N h_a\\), \\(f_b = N_b h\\),
+//! \\(f_{aa} = N_{aa} h + N_a h_a^T + h_a N_a^T + N h_{aa}\\),
+//! \\(f_{ab} = N_{ab} h + h_a N_b^T\\), \\(f_{bb} = N_{bb} h\\).
+//! Since \\(a = \sum_i b_i' q_i\\) and \\(b = \sum_i b_i'' q_i\\), the gradient is
+//! \\(\partial E/\partial q_i = \tfrac{EI}{2}\int (b_i' f_a + b_i'' f_b)\\) and the Hessian
+//! block \\((i, j)\\) is \\(\tfrac{EI}{2}\int [b_i' b_j' f_{aa} + b_i' b_j'' f_{ab} +
+//! b_i'' b_j' f_{ab}^T + b_i'' b_j'' f_{bb}]\\).
+//!
+//! **Definite Hessian.** [`HessianKind::Definite`] replaces the 6×6 density Hessian
+//! \\(\begin{pmatrix} f_{aa} & f_{ab} \\ f_{ab}^T & f_{bb}\end{pmatrix}\\) at each
+//! quadrature point by its eigen-clamped projection (negative eigenvalues set to zero),
+//! as [`crate::Stretching`] does with its 3×3 density; the assembled matrix
+//! \\(\sum_p w_p L_p^T H_p^+ L_p\\) is then positive semi-definite, and equals the exact
+//! Hessian wherever every density Hessian is (e.g. on a straight rod, where
+//! \\(f_{aa} = f_{ab} = 0\\) and \\(f_{bb} = 2|a|^{-6}(|a|^2 I - a a^T) \succeq 0\\)).
+//! Forces stay exact, so Newton still converges to the right solution.
+//!
+//! **Degree.** A degree-1 spline has \\(C''\\) equal to Dirac masses at the knots: κ² is
+//! not integrable, and the quadrature would silently return zero. [`Bending::check`]
+//! (called by [`Bending::for_rod`]) rejects degree < 2; the [`Energy`] methods themselves
+//! cannot return errors.
+//!
+//! **Quadrature.** κ² is rational in `s`; the rod's table (`max(d+1, 2d−1)` Gauss points
+//! per span) does not integrate it exactly, so unlike the polynomial stretching energy,
+//! bending changes slightly under knot insertion (the new spans move the quadrature
+//! points). The change is the quadrature error, measured by the conformance harness.
+
+use crate::Energy;
+use nalgebra::{Matrix3, Matrix6, Vector3};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, QuadPoint, Real, Rod};
+
+/// Regularisation δ of \\(|C'|^2\\) in the curvature's denominator (dimensionless).
+pub const STRETCH_FLOOR: Real = 1e-10;
+
+/// Bending energy with bending stiffness `EI` (N·m²), exact nonlinear curvature.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bending {
+    /// Bending stiffness `EI`, N·m².
+    pub stiffness: Real,
+}
+
+/// First derivatives of the density κ² at one point (without the factor `EI/2`).
+struct Density {
+    fa: Vector3<Real>,
+    fb: Vector3<Real>,
+}
+
+impl Bending {
+    /// Bending energy with stiffness `EI > 0`. Use [`Bending::for_rod`] (or call
+    /// [`Bending::check`]) to also reject rods of degree < 2.
+    pub fn new(stiffness: Real) -> Result<Self, CoreError> {
+        splinerod_core::rod::positive("bending_stiffness", stiffness)?;
+        Ok(Self { stiffness })
+    }
+
+    /// Bending energy for `rod`: checks `EI > 0` and the rod's degree (≥ 2).
+    pub fn for_rod(stiffness: Real, rod: &Rod) -> Result<Self, CoreError> {
+        let bending = Self::new(stiffness)?;
+        bending.check(rod)?;
+        Ok(bending)
+    }
+
+    /// Error unless `rod`'s degree is at least 2 (a degree-1 rod's curvature is a sum of
+    /// Dirac masses at the knots, not square-integrable).
+    pub fn check(&self, rod: &Rod) -> Result<(), CoreError> {
+        let degree = rod.basis().degree();
+        if degree >= 2 {
+            return Ok(());
+        }
+        Err(CoreError::InvalidParameter {
+            name: "degree",
+            value: degree as Real,
+            reason: "bending needs degree >= 2: the curvature of a degree-1 spline is not square-integrable",
+        })
+    }
+
+    /// Squared curvature \\(\kappa^2\\) (guarded) of the rod at material point `s`.
+    pub fn curvature_squared(rod: &Rod, s: Real) -> Result<Real, CoreError> {
+        let b = rod.basis_at(s)?;
+        let (c1, c2) = (
+            b.combine(&b.d1, &rod.positions),
+            b.combine(&b.d2, &rod.positions),
+        );
+        Ok(kappa_squared(&c1, &c2))
+    }
+
+    /// Adds the 6×6 density Hessian (scaled by `scale`) at a point to `hessian`.
+    fn add_point_hessian(
+        &self,
+        qp: &QuadPoint<'_>,
+        h6: &Matrix6<Real>,
+        scale: Real,
+        hessian: &mut BlockBanded,
+    ) {
+        let haa: Matrix3<Real> = h6.fixed_view::<3, 3>(0, 0).into_owned() * scale;
+        let hab: Matrix3<Real> = h6.fixed_view::<3, 3>(0, 3).into_owned() * scale;
+        let hbb: Matrix3<Real> = h6.fixed_view::<3, 3>(3, 3).into_owned() * scale;
+        let hba = hab.transpose();
+        for i in 0..qp.d1.len() {
+            let (ai, bi) = (qp.d1[i], qp.d2[i]);
+            for j in i..qp.d1.len() {
+                let (aj, bj) = (qp.d1[j], qp.d2[j]);
+                let block = haa * (ai * aj) + hab * (ai * bj) + hba * (bi * aj) + hbb * (bi * bj);
+                hessian.add_block(qp.first + i, qp.first + j, &block);
+            }
+        }
+    }
+}
+
+/// \\(C'\\) and \\(C''\\) at a quadrature point.
+#[inline]
+fn derivatives(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> (Vector3<Real>, Vector3<Real>) {
+    let mut a = Vector3::zeros();
+    let mut b = Vector3::zeros();
+    for (k, (&d1, &d2)) in qp.d1.iter().zip(qp.d2).enumerate() {
+        a += positions[qp.first + k] * d1;
+        b += positions[qp.first + k] * d2;
+    }
+    (a, b)
+}
+
+/// Guarded \\(\kappa^2 = |a \times b|^2 / (|a|^2 + \delta)^3\\).
+#[inline]
+fn kappa_squared(a: &Vector3<Real>, b: &Vector3<Real>) -> Real {
+    let g = a.norm_squared() + STRETCH_FLOOR;
+    a.cross(b).norm_squared() / (g * g * g)
+}
+
+/// κ² and its first derivatives with respect to `a` and `b`.
+#[inline]
+fn density(a: &Vector3<Real>, b: &Vector3<Real>) -> Density {
+    let g = a.norm_squared() + STRETCH_FLOOR;
+    let h = 1.0 / (g * g * g);
+    let n = a.cross(b).norm_squared();
+    let ab = a.dot(b);
+    let na = a * (2.0 * b.norm_squared()) - b * (2.0 * ab);
+    let nb = b * (2.0 * a.norm_squared()) - a * (2.0 * ab);
+    let ha = a * (-6.0 * h / g);
+    Density {
+        fa: na * h + ha * n,
+        fb: nb * h,
+    }
+}
+
+/// The exact 6×6 Hessian of κ² with respect to `(a, b)`.
+fn density_hessian(a: &Vector3<Real>, b: &Vector3<Real>) -> Matrix6<Real> {
+    let g = a.norm_squared() + STRETCH_FLOOR;
+    let h = 1.0 / (g * g * g);
+    let (a2, b2, ab) = (a.norm_squared(), b.norm_squared(), a.dot(b));
+    let n = a.cross(b).norm_squared();
+    let id = Matrix3::identity();
+    let na = a * (2.0 * b2) - b * (2.0 * ab);
+    let nb = b * (2.0 * a2) - a * (2.0 * ab);
+    let naa = (id * b2 - b * b.transpose()) * 2.0;
+    let nbb = (id * a2 - a * a.transpose()) * 2.0;
+    let nab = a * b.transpose() * 4.0 - b * a.transpose() * 2.0 - id * (2.0 * ab);
+    let ha = a * (-6.0 * h / g);
+    let haa = id * (-6.0 * h / g) + a * a.transpose() * (48.0 * h / (g * g));
+    let faa = naa * h + na * ha.transpose() + ha * na.transpose() + haa * n;
+    let fab = nab * h + ha * nb.transpose();
+    let fbb = nbb * h;
+    let mut out = Matrix6::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&faa);
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&fab);
+    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&fab.transpose());
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&fbb);
+    out
+}
+
+/// Nearest positive semi-definite matrix (negative eigenvalues set to zero).
+fn clamp_psd(m: &Matrix6<Real>) -> Matrix6<Real> {
+    let sym = (m + m.transpose()) * 0.5;
+    let eig = sym.symmetric_eigen();
+    if eig.eigenvalues.iter().all(|&l| l >= 0.0) {
+        return sym;
+    }
+    let clamped = eig.eigenvalues.map(|l| l.max(0.0));
+    eig.eigenvectors * Matrix6::from_diagonal(&clamped) * eig.eigenvectors.transpose()
+}
+
+impl Energy for Bending {
+    fn name(&self) -> &str {
+        "bending"
+    }
+
+    fn energy(&self, rod: &Rod) -> Real {
+        let k = 0.5 * self.stiffness;
+        rod.quadrature()
+            .points()
+            .map(|qp| {
+                let (a, b) = derivatives(&qp, &rod.positions);
+                qp.weight * k * kappa_squared(&a, &b)
+            })
+            .sum()
+    }
+
+    fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        let k = 0.5 * self.stiffness;
+        for qp in rod.quadrature().points() {
+            let (a, b) = derivatives(&qp, &rod.positions);
+            let d = density(&a, &b);
+            let (fa, fb) = (d.fa * (qp.weight * k), d.fb * (qp.weight * k));
+            for (i, (&d1, &d2)) in qp.d1.iter().zip(qp.d2).enumerate() {
+                gradient[qp.first + i] += fa * d1 + fb * d2;
+            }
+        }
+    }
+
+    fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        let k = 0.5 * self.stiffness;
+        for qp in rod.quadrature().points() {
+            let (a, b) = derivatives(&qp, &rod.positions);
+            let exact = density_hessian(&a, &b);
+            let h6 = match kind {
+                HessianKind::Exact => exact,
+                HessianKind::Definite => clamp_psd(&exact),
+            };
+            self.add_point_hessian(&qp, &h6, qp.weight * k, hessian);
+        }
+    }
+}

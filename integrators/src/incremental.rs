@@ -1,0 +1,207 @@
+//! The Newton problem shared by the implicit schemes, and the step bookkeeping around it
+//! (validation, saved start state, finite check, rollback).
+//!
+//! Implicit Euler, the implicit midpoint rule and BDF2 all reduce to one minimisation in
+//! an unknown velocity `x`, with a base position \\(\hat q\\), a reference velocity
+//! \\(\hat v\\) and an effective step β:
+//!
+//! \\[ \Phi(x) = \tfrac12 (x - \hat v)^T M (x - \hat v) + E(\hat q + \beta x)
+//!     + \tfrac{\beta\alpha}{2}\, x^T M x, \\]
+//!
+//! residual \\(r = \nabla\Phi = M(x - \hat v) + \beta \nabla E(\hat q + \beta x) +
+//! \beta\alpha M x\\), Newton matrix \\(A = (1 + \beta\alpha) M + \beta^2 K\\) (exact
+//! Hessian first, the definite one if `A` is not positive definite). The rod holds
+//! positions \\(\hat q + \beta x\\) and velocities `x` while Newton runs. Pins are reached
+//! at the *end* of the step, which is \\(\hat q + \rho x\\) with a reach `ρ` (= β except
+//! for the midpoint rule): \\(G x = (p - G\hat q)/\rho\\).
+
+use crate::error::positive;
+use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
+use crate::{IntegratorError, StepStats, System};
+use nalgebra::Vector3;
+use splinerod_core::{rod::check_finite, BasisValues, BlockBanded, HessianKind, Pin, Real, Rod};
+
+/// Scalars of one incremental problem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Increment {
+    /// Effective step β: positions during the solve are \\(\hat q + \beta x\\).
+    pub beta: Real,
+    /// Reach ρ: end-of-step positions are \\(\hat q + \rho x\\) (pins hold there).
+    pub reach: Real,
+}
+
+struct IncrementalProblem<'a> {
+    base_q: &'a [Vector3<Real>],
+    base_v: &'a [Vector3<Real>],
+    step: Increment,
+    alpha: Real,
+    scratch: &'a mut [Vector3<Real>],
+    hessian: HessianKind,
+}
+
+impl NewtonProblem for IncrementalProblem<'_> {
+    fn apply(&self, rod: &mut Rod, x: &[Vector3<Real>]) {
+        rod.velocities.copy_from_slice(x);
+        for ((q, q0), v) in rod.positions.iter_mut().zip(self.base_q).zip(x) {
+            *q = q0 + v * self.step.beta;
+        }
+    }
+
+    fn residual(&mut self, system: &dyn System, r: &mut [Vector3<Real>]) {
+        let rod = system.rod();
+        let beta = self.step.beta;
+        let tmp = &mut *self.scratch;
+        for ((t, v), v0) in tmp.iter_mut().zip(&rod.velocities).zip(self.base_v) {
+            *t = v * (1.0 + beta * self.alpha) - v0;
+        }
+        rod.mass_matrix().mul_vec3(tmp, r);
+        tmp.iter_mut().for_each(|t| *t = Vector3::zeros());
+        system.add_potential_gradient(tmp);
+        r.iter_mut()
+            .zip(tmp.iter())
+            .for_each(|(r, g)| *r += g * beta);
+    }
+
+    fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
+        let rod = system.rod();
+        let beta = self.step.beta;
+        a.reset(rod.len(), rod.basis().degree());
+        system.add_potential_hessian(self.hessian, a);
+        a.scale(beta * beta);
+        a.add_scaled_scalar(1.0 + beta * self.alpha, rod.mass_matrix());
+    }
+
+    fn merit(&mut self, system: &dyn System) -> Real {
+        let rod = system.rod();
+        let tmp = &mut *self.scratch;
+        tmp.iter_mut()
+            .zip(&rod.velocities)
+            .zip(self.base_v)
+            .for_each(|((t, v), v0)| *t = v - v0);
+        let m = rod.mass_matrix();
+        let inertia = 0.5 * m.bilinear_vec3(tmp, tmp);
+        let damping =
+            0.5 * self.step.beta * self.alpha * m.bilinear_vec3(&rod.velocities, &rod.velocities);
+        inertia + system.potential_energy() + damping
+    }
+
+    fn target(&self, row: &BasisValues, pin: &Pin) -> Vector3<Real> {
+        (pin.position - row.combine(&row.value, self.base_q)) / self.step.reach
+    }
+
+    fn length_per_unknown(&self) -> Real {
+        self.step.reach
+    }
+
+    fn on_not_positive_definite(&mut self) -> bool {
+        let retry = self.hessian == HessianKind::Exact;
+        self.hessian = HessianKind::Definite;
+        retry
+    }
+}
+
+/// Buffers of an implicit scheme: the start-of-step state (for rollback), the base of
+/// the incremental problem, the unknown and the Newton workspace. No allocation once
+/// sized for the rod.
+#[derive(Debug, Default)]
+pub(crate) struct Stepper {
+    /// Newton buffers and factorisation.
+    pub workspace: NewtonWorkspace,
+    /// Positions at the start of the step.
+    pub q0: Vec<Vector3<Real>>,
+    /// Velocities at the start of the step.
+    pub v0: Vec<Vector3<Real>>,
+    /// Base position \\(\hat q\\).
+    pub base_q: Vec<Vector3<Real>>,
+    /// Reference velocity \\(\hat v\\).
+    pub base_v: Vec<Vector3<Real>>,
+    /// The unknown velocity `x`.
+    pub x: Vec<Vector3<Real>>,
+    scratch: Vec<Vector3<Real>>,
+    alpha: Real,
+}
+
+impl Stepper {
+    /// Checks `dt`, the damping and the state, and saves the start state; the base is
+    /// set to it (`base_q = q0`, `base_v = v0`) and the initial guess to `x = v0`.
+    pub fn begin(&mut self, system: &dyn System, dt: Real) -> Result<(), IntegratorError> {
+        positive("dt", dt)?;
+        let rod = system.rod();
+        let alpha = rod.damping;
+        if !(alpha.is_finite() && alpha >= 0.0) {
+            let reason = "must be finite and non-negative";
+            return Err(IntegratorError::InvalidParameter {
+                name: "damping",
+                value: alpha,
+                reason,
+            });
+        }
+        rod.check_finite()?;
+        self.alpha = alpha;
+        let n = rod.len();
+        for v in [
+            &mut self.q0,
+            &mut self.v0,
+            &mut self.base_q,
+            &mut self.base_v,
+            &mut self.x,
+            &mut self.scratch,
+        ] {
+            v.resize(n, Vector3::zeros());
+        }
+        self.q0.copy_from_slice(&rod.positions);
+        self.v0.copy_from_slice(&rod.velocities);
+        self.base_q.copy_from_slice(&rod.positions);
+        self.base_v.copy_from_slice(&rod.velocities);
+        self.x.copy_from_slice(&rod.velocities);
+        Ok(())
+    }
+
+    /// Runs Newton on the incremental problem; the solution is left applied to the rod.
+    pub fn solve(
+        &mut self,
+        system: &mut dyn System,
+        params: &NewtonParams,
+        step: Increment,
+    ) -> Result<StepStats, IntegratorError> {
+        let mut problem = IncrementalProblem {
+            base_q: &self.base_q,
+            base_v: &self.base_v,
+            step,
+            alpha: self.alpha,
+            scratch: &mut self.scratch,
+            hessian: HessianKind::Exact,
+        };
+        newton::solve(
+            &mut problem,
+            system,
+            &mut self.x,
+            params,
+            &mut self.workspace,
+        )
+    }
+
+    /// Checks the end state; on any error (from `result` or non-finite values) restores
+    /// the start state exactly and returns the error.
+    pub fn finish(
+        &self,
+        system: &mut dyn System,
+        result: Result<StepStats, IntegratorError>,
+    ) -> Result<StepStats, IntegratorError> {
+        let result = result.and_then(|stats| {
+            let rod = system.rod();
+            check_finite("position", &rod.positions)
+                .and_then(|_| check_finite("velocity", &rod.velocities))
+                .map_err(|_| IntegratorError::NonFinite {
+                    what: "positions or velocities",
+                })?;
+            Ok(stats)
+        });
+        if result.is_err() {
+            let rod = system.rod_mut();
+            rod.positions.copy_from_slice(&self.q0);
+            rod.velocities.copy_from_slice(&self.v0);
+        }
+        result
+    }
+}
