@@ -6,8 +6,10 @@ use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
 use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
-use splinerod_energies::{Gravity, Stretching};
-use splinerod_integrators::{ImplicitEuler, NewtonParams, StaticParams};
+use splinerod_energies::{Bending, Clamp, Gravity, Stretching};
+use splinerod_integrators::{
+    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams, StaticParams,
+};
 
 impl Scene {
     /// The basis space on `[0, L]` described by `rod.knots`.
@@ -72,6 +74,10 @@ impl Scene {
         let l = rod.material().rest_length;
         let mut system =
             RodSystem::new(rod).with_energy(Stretching::new(self.rod.stretch_stiffness)?);
+        if let Some(ei) = self.rod.bending_stiffness {
+            let bending = Bending::for_rod(ei, &system.rod)?;
+            system = system.with_energy(bending);
+        }
         let g = Vector3::from(self.world.gravity);
         if g != Vector3::zeros() {
             system = system.with_energy(Gravity::new(g)?);
@@ -91,6 +97,11 @@ impl Scene {
                         reason,
                     ));
                 }
+            }
+            if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {
+                let stiffness = Clamp::stiffness_for(ei, l);
+                let clamp = Clamp::here(&system.rod, spec.at * l, stiffness)?;
+                system = system.with_energy(clamp);
             }
             system = system.with_pin(pin);
         }
@@ -143,9 +154,19 @@ impl Scene {
         }
     }
 
-    /// A time-stepping simulation of the scene (implicit Euler).
+    /// The time integrator named by `solver.method` (implicit Euler for `static`).
+    pub fn integrator(&self) -> Result<Box<dyn Integrator>, Error> {
+        let p = self.newton_params();
+        Ok(match self.solver.method {
+            Method::ImplicitMidpoint => Box::new(ImplicitMidpoint::new(p)?),
+            Method::Bdf2 => Box::new(Bdf2::new(p)?),
+            Method::ImplicitEuler | Method::Static => Box::new(ImplicitEuler::new(p)?),
+        })
+    }
+
+    /// A time-stepping simulation of the scene.
     pub fn build(&self) -> Result<Simulation, Error> {
-        let integrator = Box::new(ImplicitEuler::new(self.newton_params())?);
+        let integrator = self.integrator()?;
         let mut sim = Simulation::new(self.build_system()?, integrator);
         sim.adapter = self.adapter()?;
         Ok(sim)
@@ -154,7 +175,7 @@ impl Scene {
     /// Number of steps of `dt` covering `duration` (the last step ends at or just past it).
     pub fn step_count(&self) -> usize {
         match (self.solver.method, self.solver.dt, self.solver.duration) {
-            (Method::ImplicitEuler, Some(dt), Some(t)) => {
+            (m, Some(dt), Some(t)) if m != Method::Static => {
                 ((t / dt) * (1.0 - 1e-12)).ceil().max(1.0) as usize
             }
             _ => 0,

@@ -56,17 +56,18 @@ pub use splinerod_integrators as integrators;
 
 pub use splinerod_adaptivity::RefinementCriterion;
 pub use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
-pub use splinerod_energies::{Energy, Gravity, Stretching};
+pub use splinerod_energies::{Bending, Clamp, Energy, Gravity, PointSpring, Stretching};
 pub use splinerod_integrators::{
-    ImplicitEuler, Integrator, NewtonParams, StaticParams, StaticSolver, System,
+    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams, StaticParams, StaticSolver,
+    System,
 };
 
 /// Everything needed to build and run a rod, in one import.
 pub mod prelude {
     pub use crate::{
-        BSplineSpace, BasisSpace, Energy, Error, Gravity, ImplicitEuler, Integrator, Material,
-        NewtonParams, Pin, Real, Rod, RodSystem, Scene, Simulation, StaticParams, StaticSolver,
-        Stretching, System,
+        BSplineSpace, BasisSpace, Bdf2, Bending, Clamp, Energy, Error, Grab, Gravity,
+        ImplicitEuler, ImplicitMidpoint, Integrator, Material, NewtonParams, Pin, Real, Rod,
+        RodSystem, Scene, Simulation, StaticParams, StaticSolver, Stretching, System,
     };
     pub use nalgebra::Vector3;
 }

@@ -108,7 +108,7 @@ impl Tally {
 pub fn run(scene: &Scene) -> Result<RunResult, Error> {
     match scene.solver.method {
         Method::Static => run_static(scene),
-        Method::ImplicitEuler => run_dynamic(scene),
+        _ => run_dynamic(scene),
     }
 }
 

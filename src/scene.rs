@@ -46,6 +46,8 @@ pub struct RodSpec {
     pub linear_density: f64,
     /// Axial stiffness `EA = Y·r`, N (> 0).
     pub stretch_stiffness: f64,
+    /// Bending stiffness `EI`, N·m² (> 0; needs degree ≥ 2). Default: no bending energy.
+    pub bending_stiffness: Option<f64>,
     /// Mass-proportional damping, 1/s (≥ 0). Default 0.
     #[serde(default)]
     pub damping: f64,
@@ -95,6 +97,9 @@ pub struct PinSpec {
     /// Held position, m. Default: where the point starts; if given it must agree with the
     /// initial shape (a pin never makes the rod jump).
     pub position: Option<[f64; 3]>,
+    /// Also hold the tangent direction there (a clamp; needs `rod.bending_stiffness`).
+    #[serde(default)]
+    pub clamp: bool,
 }
 
 /// `[world]`.
@@ -124,6 +129,10 @@ impl Default for WorldSpec {
 pub enum Method {
     /// Implicit Euler time stepping.
     ImplicitEuler,
+    /// Implicit midpoint: second order, conserves the energy of linear systems.
+    ImplicitMidpoint,
+    /// Second-order backward differentiation (dissipative).
+    Bdf2,
     /// Static equilibrium (no time).
     Static,
 }
@@ -132,7 +141,7 @@ pub enum Method {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
-    /// `"implicit-euler"` or `"static"`.
+    /// `"implicit-euler"`, `"implicit-midpoint"`, `"bdf2"` or `"static"`.
     pub method: Method,
     /// Time step, s (> 0; required for time stepping).
     pub dt: Option<f64>,
@@ -204,6 +213,13 @@ impl Scene {
         positive("rod.rest_length", r.rest_length)?;
         positive("rod.linear_density", r.linear_density)?;
         positive("rod.stretch_stiffness", r.stretch_stiffness)?;
+        if let Some(ei) = r.bending_stiffness {
+            positive("rod.bending_stiffness", ei)?;
+            if r.degree < 2 {
+                let reason = "bending needs degree ≥ 2 (a degree-1 curve has no curvature)";
+                return Err(Error::field("rod.bending_stiffness", ei, reason));
+            }
+        }
         non_negative("rod.damping", r.damping)?;
         if !(1..=splinerod_core::MAX_DEGREE).contains(&r.degree) {
             return Err(Error::field(
@@ -225,6 +241,10 @@ impl Scene {
             fraction(&format!("pins[{i}].at"), pin.at)?;
             if let Some(p) = pin.position {
                 finite_vec(&format!("pins[{i}].position"), p)?;
+            }
+            if pin.clamp && r.bending_stiffness.is_none() {
+                let reason = "a clamp holds the tangent against bending: set rod.bending_stiffness";
+                return Err(Error::field(format!("pins[{i}].clamp"), true, reason));
             }
         }
         finite_vec("world.gravity", self.world.gravity)?;
@@ -301,7 +321,7 @@ impl Scene {
 
     fn validate_solver(&self) -> Result<(), Error> {
         let s = &self.solver;
-        if s.method == Method::ImplicitEuler {
+        if s.method != Method::Static {
             positive(
                 "solver.dt",
                 s.dt.ok_or_else(|| {

@@ -1,4 +1,5 @@
-//! Bad input in the adaptivity, grab and cut tables: one clear error naming the field.
+//! Bad input in the adaptivity, grab and cut tables and the bending fields: one clear
+//! error naming the field.
 
 use splinerod::Scene;
 
@@ -115,4 +116,32 @@ fn bad_adaptivity_values() {
     for (line, field) in cases {
         rejects(&format!("[adaptivity]\n{line}"), field);
     }
+}
+
+#[test]
+fn bad_bending_values() {
+    let with_rod_line =
+        |line: &str| BASE.replace("control_points = 8", &format!("control_points = 8\n{line}"));
+    for (line, field) in [
+        ("bending_stiffness = -1.0", "rod.bending_stiffness"),
+        ("bending_stiffness = nan", "rod.bending_stiffness"),
+        (
+            "bending_stiffness = 1.0\ndegree = 1",
+            "rod.bending_stiffness",
+        ),
+    ] {
+        let text = with_rod_line(line);
+        let e = Scene::from_toml(&text).expect_err(line).to_string();
+        assert!(e.contains(field), "{line}: {e}");
+    }
+    let clamp_without_bending = BASE.replace("at = 0.0", "at = 0.0\nclamp = true");
+    let e = Scene::from_toml(&clamp_without_bending)
+        .expect_err("clamp")
+        .to_string();
+    assert!(e.contains("pins[0].clamp"), "{e}");
+    let unknown_method = BASE.replace("implicit-euler", "explicit-euler");
+    let e = Scene::from_toml(&unknown_method)
+        .expect_err("method")
+        .to_string();
+    assert!(e.contains("solver.method") || e.contains("method"), "{e}");
 }
