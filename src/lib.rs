@@ -36,6 +36,11 @@
 mod build;
 mod error;
 mod grab;
+pub mod observe;
+pub mod output;
+pub mod problems;
+pub mod report;
+mod report_md;
 pub mod runner;
 pub mod scene;
 mod scene_adapt;
@@ -44,7 +49,8 @@ mod system;
 
 pub use error::Error;
 pub use grab::Grab;
-pub use runner::{run, RunResult};
+pub use observe::{Frame, Observer};
+pub use runner::{run, run_observed, RunResult};
 pub use scene::Scene;
 pub use simulation::{Simulation, StepReport};
 pub use system::RodSystem;

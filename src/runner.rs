@@ -1,6 +1,7 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
+use crate::observe::{Frame, Observer};
 use crate::scene::{Method, Scene};
 use crate::{Error, RodSystem};
 use nalgebra::Vector3;
@@ -70,6 +71,8 @@ pub struct RunResult {
     pub pieces: usize,
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
+    /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
+    pub median_step_seconds: Real,
 }
 
 /// What a run accumulated besides the final state.
@@ -81,6 +84,7 @@ struct Tally {
     probes: Vec<Probe>,
     pin_forces: Vec<Vector3<Real>>,
     history: Vec<[Real; 2]>,
+    step_seconds: Vec<Real>,
 }
 
 impl Tally {
@@ -93,6 +97,7 @@ impl Tally {
             probes,
             pin_forces: Vec::new(),
             history: vec![[0.0, system.rod.len() as Real]],
+            step_seconds: Vec::new(),
         }
     }
 
@@ -106,13 +111,43 @@ impl Tally {
 
 /// Runs `scene` to its end.
 pub fn run(scene: &Scene) -> Result<RunResult, Error> {
+    run_observed(scene, &mut [])
+}
+
+/// Runs `scene` to its end, showing every step to `observers` (in order).
+pub fn run_observed(
+    scene: &Scene,
+    observers: &mut [&mut dyn Observer],
+) -> Result<RunResult, Error> {
     match scene.solver.method {
-        Method::Static => run_static(scene),
-        _ => run_dynamic(scene),
+        Method::Static => run_static(scene, observers),
+        _ => run_dynamic(scene, observers),
     }
 }
 
-fn run_static(scene: &Scene) -> Result<RunResult, Error> {
+fn frame<'a>(scene: &'a Scene, system: &'a RodSystem, time: Real, step: usize) -> Frame<'a> {
+    let total_steps = scene.step_count();
+    Frame {
+        scene,
+        system,
+        time,
+        step,
+        total_steps,
+    }
+}
+
+fn notify_finish(
+    observers: &mut [&mut dyn Observer],
+    frame: &Frame<'_>,
+    result: RunResult,
+) -> Result<RunResult, Error> {
+    for o in observers.iter_mut() {
+        o.finish(frame, &result)?;
+    }
+    Ok(result)
+}
+
+fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunResult, Error> {
     let mut system = scene.build_system()?;
     let l = scene.rod.rest_length;
     for cut in &scene.cuts {
@@ -125,6 +160,9 @@ fn run_static(scene: &Scene) -> Result<RunResult, Error> {
         g.update(t, rod)?;
     }
     let mut tally = Tally::new(&system, probes_at_start(scene, &system)?);
+    for o in observers.iter_mut() {
+        o.start(&frame(scene, &system, 0.0, 0))?;
+    }
     let mut solver = StaticSolver::new(scene.static_params())?;
     let start = Instant::now();
     let stats = solver.solve(&mut system)?;
@@ -136,18 +174,23 @@ fn run_static(scene: &Scene) -> Result<RunResult, Error> {
         unconverged_steps: 0,
     };
     tally.pin_forces = solver.pin_forces().to_vec();
-    finish(scene, &system, tally)
+    let result = finish(scene, &system, tally)?;
+    notify_finish(observers, &frame(scene, &system, 0.0, 0), result)
 }
 
-fn run_dynamic(scene: &Scene) -> Result<RunResult, Error> {
+fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunResult, Error> {
     let mut sim = scene.build()?;
     let dt = scene.solver.dt.unwrap_or_default();
     let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
     let mut cuts: Vec<_> = scene.cuts.iter().map(|c| (c.time, c.at)).collect();
     cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut next_cut = 0;
+    for o in observers.iter_mut() {
+        o.start(&frame(scene, &sim.system, 0.0, 0))?;
+    }
     let start = Instant::now();
     for _ in 0..scene.step_count() {
+        let step_start = Instant::now();
         let report = sim.step(dt)?;
         let totals = &mut tally.solver;
         totals.newton_iterations += report.solver.newton_iterations;
@@ -158,16 +201,27 @@ fn run_dynamic(scene: &Scene) -> Result<RunResult, Error> {
             sim.cut(scene.material_coordinate(cuts[next_cut].1))?;
             next_cut += 1;
         }
+        let wall = step_start.elapsed().as_secs_f64();
+        tally.step_seconds.push(wall);
         tally.count(sim.time, sim.system.rod.len());
         for probe in &mut tally.probes {
             probe.t.push(sim.time);
             let p = sim.system.rod.point(scene.material_coordinate(probe.s))?;
             probe.positions.push(p.into());
         }
+        let now = frame(scene, &sim.system, sim.time, sim.steps);
+        for o in observers.iter_mut() {
+            o.step(&now, &report, wall)?;
+        }
     }
     tally.wall = start.elapsed().as_secs_f64();
     (tally.time, tally.steps) = (sim.time, sim.steps);
-    finish(scene, &sim.system, tally)
+    let result = finish(scene, &sim.system, tally)?;
+    notify_finish(
+        observers,
+        &frame(scene, &sim.system, sim.time, sim.steps),
+        result,
+    )
 }
 
 fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
@@ -186,7 +240,7 @@ fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Erro
         .collect()
 }
 
-fn finish(scene: &Scene, system: &RodSystem, tally: Tally) -> Result<RunResult, Error> {
+fn finish(scene: &Scene, system: &RodSystem, mut tally: Tally) -> Result<RunResult, Error> {
     let rod = &system.rod;
     let m = scene.output.samples;
     let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
@@ -210,7 +264,17 @@ fn finish(scene: &Scene, system: &RodSystem, tally: Tally) -> Result<RunResult, 
         pin_forces: tally.pin_forces.iter().map(|f| (*f).into()).collect(),
         pieces: rod.pieces(),
         control_points_history: tally.history,
+        median_step_seconds: median(&mut tally.step_seconds),
     })
+}
+
+/// Median of `values` (0 if empty); reorders them.
+fn median(values: &mut [Real]) -> Real {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, Real::total_cmp).1
 }
 
 impl RunResult {
@@ -224,6 +288,10 @@ impl RunResult {
             self.wall_seconds,
             self.solver.newton_iterations
         );
+        if self.steps > 0 {
+            let us = self.median_step_seconds * 1e6;
+            out.push_str(&format!("median step: {us:.1} µs\n"));
+        }
         let energies: Vec<String> = self
             .energy
             .iter()

@@ -2,20 +2,17 @@
 //! material-point positions after a static solve, the convergence order of the cubic
 //! Galerkin discretisation, and the same equilibrium reached by damped time stepping.
 
-mod common;
-
-use common::{catenary_reference, catenary_scene, max_error};
+use splinerod::problems::{catenary_error, catenary_reference, catenary_scene};
 use splinerod::{run, Real};
 
 fn static_error(n: usize) -> Real {
-    let scene = catenary_scene(n, 0.0, r#"method = "static""#);
+    let scene = catenary_scene(n, 0.0, r#"method = "static""#).expect("scene");
     let result = run(&scene).expect("static solve");
-    let (s, xy) = catenary_reference();
-    assert_eq!(result.samples.s.len(), s.len());
-    for (a, b) in result.samples.s.iter().zip(&s) {
+    let reference = catenary_reference().expect("reference");
+    for (a, b) in result.samples.s.iter().zip(&reference.s) {
         assert!((a - b).abs() < 1e-14, "sample {a} vs reference {b}");
     }
-    max_error(&result.samples.positions, &xy)
+    catenary_error(&result).expect("error")
 }
 
 #[test]
@@ -41,9 +38,10 @@ fn static_catenary_converges_at_least_at_fourth_order() {
 #[test]
 fn damped_dynamics_settles_on_the_static_equilibrium() {
     let n = 16;
-    let statics = run(&catenary_scene(n, 0.0, r#"method = "static""#)).expect("static");
+    let statics = catenary_scene(n, 0.0, r#"method = "static""#).expect("scene");
+    let statics = run(&statics).expect("static");
     let solver = "method = \"implicit-euler\"\ndt = 0.01\nduration = 6.0";
-    let dynamic = run(&catenary_scene(n, 4.0, solver)).expect("dynamic");
+    let dynamic = run(&catenary_scene(n, 4.0, solver).expect("scene")).expect("dynamic");
     let gap = statics
         .samples
         .positions

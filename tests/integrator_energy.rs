@@ -14,47 +14,25 @@
 //! * BDF2: energy × \\(|\rho|^2\\) per step, ρ the principal root of
 //!   \\((1 - \tfrac23 i\omega h)\rho^2 - \tfrac43\rho + \tfrac13 = 0\\).
 
-mod common;
-
-use common::{numbers, reference};
 use nalgebra::Complex;
 use splinerod::core::{BlockBanded, HessianKind};
-use splinerod::integrators::{modal, Bdf2, ImplicitMidpoint};
+use splinerod::integrators::{Bdf2, ImplicitMidpoint};
 use splinerod::prelude::*;
+use splinerod::problems::{string_modes, string_reference, taut_string};
 
 const DT: Real = 1e-3;
 const PERIODS: Real = 100.0;
 
-fn string() -> RodSystem {
-    let material = Material {
-        rest_length: 1.0,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, 16, 1.0).expect("basis");
-    let end = Vector3::new(1.2, 0.0, 0.0);
-    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
-    let [a, b] = [Pin::here(&rod, 0.0), Pin::here(&rod, 1.0)];
-    RodSystem::new(rod)
-        .with_energy(Stretching::new(100.0).expect("stiffness"))
-        .with_pin(a.expect("pin"))
-        .with_pin(b.expect("pin"))
-}
-
 /// Runs `integrator` for 100 periods from the first transverse mode; returns the ratio of
 /// final to initial oscillation energy, the mode's ω and the number of steps.
 fn run(integrator: Box<dyn Integrator>) -> (Real, Real, usize) {
-    let mut system = string();
+    let mut system = taut_string(16).expect("string");
     let rest = system.rod.positions.clone();
     let n = rest.len();
     let mut k = BlockBanded::zeros(n, 3);
     system.add_potential_hessian(HessianKind::Exact, &mut k);
-    let modes = modal::modes(&system, 6).expect("modes");
-    let mode = modes
-        .iter()
-        .find(|m| m.shape.iter().map(|v| v.x * v.x).sum::<Real>() < 1e-9)
-        .expect("a transverse mode")
-        .clone();
-    let f = numbers(&reference("string_L1_D1.2_mu0.1_EA100.json")["transverse_hz"])[0];
+    let (mode, _) = string_modes(16).expect("modes");
+    let f = string_reference().expect("reference").transverse_hz[0];
     assert!(
         (mode.frequency - f).abs() < 1e-5 * f,
         "{} Hz",

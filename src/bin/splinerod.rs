@@ -1,7 +1,14 @@
-//! The `splinerod` command line: `splinerod run SCENE.toml [--json OUT.json]`.
+//! The `splinerod` command line:
+//!
+//! * `splinerod run SCENE.toml [--json OUT] [--stats OUT.csv] [--frames DIR [--every K]
+//!   [--camera xy|xz|yz|oblique] [--svg] [--polygon] [--gif OUT.gif]] [--vtk DIR]`
+//! * `splinerod report [--quick] --out DIR`
+//!
 //! Errors print one line naming the field or file and exit with code 2.
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
+use splinerod::{Error, Observer};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -18,14 +25,50 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Runs a scene to its end, prints a summary and optionally writes the JSON result.
-    Run {
-        /// The scene file (TOML; see scenes/README.md).
-        scene: PathBuf,
-        /// Where to write the JSON result.
+    /// Runs a scene to its end, prints a summary and optionally writes outputs.
+    Run(RunArgs),
+    /// Measures speed against error on the problems with known answers.
+    Report {
+        /// A few points per sweep (under 30 s).
         #[arg(long)]
-        json: Option<PathBuf>,
+        quick: bool,
+        /// Directory for report.md and its plots.
+        #[arg(long)]
+        out: PathBuf,
     },
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// The scene file (TOML; see scenes/README.md).
+    scene: PathBuf,
+    /// Where to write the JSON result.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Per-step statistics as CSV.
+    #[arg(long)]
+    stats: Option<PathBuf>,
+    /// Directory for PNG pictures of the rod.
+    #[arg(long)]
+    frames: Option<PathBuf>,
+    /// Record every K-th step (pictures and VTK).
+    #[arg(long, default_value_t = 1)]
+    every: usize,
+    /// Camera of the pictures: xy, xz, yz or oblique.
+    #[arg(long, default_value = "xy")]
+    camera: String,
+    /// Also write SVG pictures.
+    #[arg(long)]
+    svg: bool,
+    /// Draw the control polygon in the pictures.
+    #[arg(long)]
+    polygon: bool,
+    /// Assemble the pictures into an animated GIF (needs --frames).
+    #[arg(long)]
+    gif: Option<PathBuf>,
+    /// Directory for ParaView files (VTK PolyData and a PVD collection).
+    #[arg(long)]
+    vtk: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -38,22 +81,64 @@ fn main() -> ExitCode {
     }
 }
 
-fn execute(cli: Cli) -> Result<(), splinerod::Error> {
+fn execute(cli: Cli) -> Result<(), Error> {
     match cli.command {
-        Command::Run { scene, json } => {
-            let loaded = splinerod::Scene::load(&scene)?;
-            let result = splinerod::run(&loaded)?;
-            print!("{}", result.summary());
-            if let Some(path) = json {
-                let text = serde_json::to_string_pretty(&result)
-                    .map_err(|e| splinerod::Error::Scene(e.to_string()))?;
-                std::fs::write(&path, text).map_err(|source| splinerod::Error::Io {
-                    path: path.display().to_string(),
-                    source,
-                })?;
-                println!("wrote {}", path.display());
-            }
+        Command::Run(args) => run(args),
+        Command::Report { quick, out } => {
+            let report = splinerod::report::write_report(&out, quick)?;
+            println!(
+                "static catenary order {:.2}; wrote {}",
+                report.order,
+                out.join("report.md").display()
+            );
             Ok(())
         }
     }
+}
+
+/// The observers the flags ask for, all checked before anything runs.
+fn observers(args: &RunArgs) -> Result<Vec<Box<dyn Observer>>, Error> {
+    if args.every == 0 {
+        return Err(Error::field("--every", 0, "must be at least 1"));
+    }
+    let camera = picture::Camera::from_name(&args.camera)?;
+    if args.gif.is_some() && args.frames.is_none() {
+        return Err(Error::field("--gif", "given", "needs --frames DIR"));
+    }
+    let mut list: Vec<Box<dyn Observer>> = vec![Box::new(Progress::new())];
+    if let Some(path) = &args.stats {
+        list.push(Box::new(StatsWriter::new(path)?));
+    }
+    if let Some(dir) = &args.frames {
+        let mut pictures = picture::Pictures::new(dir, args.every, camera, args.svg, args.polygon)?;
+        if let Some(gif) = &args.gif {
+            pictures = pictures.with_gif(gif.clone());
+        }
+        list.push(Box::new(pictures));
+    }
+    if let Some(dir) = &args.vtk {
+        list.push(Box::new(VtkWriter::new(dir, args.every)?));
+    }
+    Ok(list)
+}
+
+fn run(args: RunArgs) -> Result<(), Error> {
+    let scene = splinerod::Scene::load(&args.scene)?;
+    let mut boxed = observers(&args)?;
+    let mut refs: Vec<&mut dyn Observer> = Vec::with_capacity(boxed.len());
+    for b in boxed.iter_mut() {
+        refs.push(b.as_mut());
+    }
+    let result = splinerod::run_observed(&scene, &mut refs)?;
+    print!("{}", result.summary());
+    if let Some(path) = &args.json {
+        let text =
+            serde_json::to_string_pretty(&result).map_err(|e| Error::Scene(e.to_string()))?;
+        std::fs::write(path, text).map_err(|source| Error::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
 }

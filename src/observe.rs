@@ -1,0 +1,46 @@
+//! Observers of a run: whatever wants to see the state as it evolves (pictures, ParaView
+//! files, per-step statistics, a progress bar) implements [`Observer`] and is handed to
+//! [`crate::runner::run_observed`]. The runner calls [`Observer::start`] once before the
+//! first step, [`Observer::step`] after every step (after adaptivity and cuts), and
+//! [`Observer::finish`] with the final result. A static solve has no steps: `start` sees
+//! the initial state and `finish` the equilibrium.
+
+use crate::{Error, RodSystem, RunResult, Scene, StepReport};
+use splinerod_core::Real;
+
+/// The state an observer sees.
+#[derive(Debug, Clone, Copy)]
+pub struct Frame<'a> {
+    /// The scene being run.
+    pub scene: &'a Scene,
+    /// The mechanical state.
+    pub system: &'a RodSystem,
+    /// Simulated time, s.
+    pub time: Real,
+    /// Steps taken so far.
+    pub step: usize,
+    /// Steps the run will take in all (0 for a static solve).
+    pub total_steps: usize,
+}
+
+/// Sees a run unfold. Every method defaults to doing nothing.
+pub trait Observer {
+    /// Before the first step.
+    fn start(&mut self, frame: &Frame<'_>) -> Result<(), Error> {
+        let _ = frame;
+        Ok(())
+    }
+
+    /// After each step, with what the step did and its wall time (s, integration and
+    /// adaptivity).
+    fn step(&mut self, frame: &Frame<'_>, report: &StepReport, wall: Real) -> Result<(), Error> {
+        let _ = (frame, report, wall);
+        Ok(())
+    }
+
+    /// At the end, with the run's result.
+    fn finish(&mut self, frame: &Frame<'_>, result: &RunResult) -> Result<(), Error> {
+        let _ = (frame, result);
+        Ok(())
+    }
+}

@@ -1,0 +1,10 @@
+//! Outputs of a run, each an [`Observer`](crate::Observer): pictures (PNG/SVG frames
+//! and a GIF), ParaView files (VTK PolyData and a PVD collection), per-step statistics
+//! (CSV), a progress bar, and the plotting used by the speed-vs-error report.
+
+pub mod camera;
+pub mod picture;
+pub mod plot;
+pub mod progress;
+pub mod stats;
+pub mod vtk;
