@@ -34,6 +34,7 @@
 #![warn(missing_docs)]
 
 mod build;
+mod ensemble;
 mod error;
 mod grab;
 pub mod observe;
@@ -41,12 +42,15 @@ pub mod output;
 pub mod problems;
 pub mod report;
 mod report_md;
+mod run_ensemble;
 pub mod runner;
 pub mod scene;
 mod scene_adapt;
+mod scene_ensemble;
 mod simulation;
 mod system;
 
+pub use ensemble::Ensemble;
 pub use error::Error;
 pub use grab::Grab;
 pub use observe::{Frame, Observer};

@@ -2,8 +2,8 @@
 //! writes as JSON.
 
 use crate::observe::{Frame, Observer};
-use crate::scene::{Method, Scene};
-use crate::{Error, RodSystem};
+use crate::scene::{MemberSummary, Method, Scene};
+use crate::{Error, RodSystem, StepReport};
 use nalgebra::Vector3;
 use serde::Serialize;
 use splinerod_core::Real;
@@ -72,23 +72,28 @@ pub struct RunResult {
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
     /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
+    /// For an ensemble: of one step of the whole ensemble.
     pub median_step_seconds: Real,
+    /// Per-member summaries of an `[ensemble]` run (absent otherwise); the other fields
+    /// then describe member 0, except `wall_seconds` and `solver` (the whole ensemble).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ensemble: Vec<MemberSummary>,
 }
 
 /// What a run accumulated besides the final state.
-struct Tally {
-    time: Real,
-    steps: usize,
-    wall: Real,
-    solver: SolverTotals,
-    probes: Vec<Probe>,
-    pin_forces: Vec<Vector3<Real>>,
-    history: Vec<[Real; 2]>,
-    step_seconds: Vec<Real>,
+pub(crate) struct Tally {
+    pub(crate) time: Real,
+    pub(crate) steps: usize,
+    pub(crate) wall: Real,
+    pub(crate) solver: SolverTotals,
+    pub(crate) probes: Vec<Probe>,
+    pub(crate) pin_forces: Vec<Vector3<Real>>,
+    pub(crate) history: Vec<[Real; 2]>,
+    pub(crate) step_seconds: Vec<Real>,
 }
 
 impl Tally {
-    fn new(system: &RodSystem, probes: Vec<Probe>) -> Self {
+    pub(crate) fn new(system: &RodSystem, probes: Vec<Probe>) -> Self {
         Self {
             time: 0.0,
             steps: 0,
@@ -101,8 +106,32 @@ impl Tally {
         }
     }
 
+    /// Adds one step's solver counters.
+    pub(crate) fn add(&mut self, report: &StepReport) {
+        let totals = &mut self.solver;
+        totals.newton_iterations += report.solver.newton_iterations;
+        totals.symbolic_analyses += report.solver.symbolic_analyses;
+        totals.line_search_cuts += report.solver.line_search_cuts;
+        totals.unconverged_steps += usize::from(!report.solver.converged);
+    }
+
+    /// Appends the probed material points of `system` at time `t`.
+    pub(crate) fn probe(
+        &mut self,
+        scene: &Scene,
+        system: &RodSystem,
+        t: Real,
+    ) -> Result<(), Error> {
+        for probe in &mut self.probes {
+            probe.t.push(t);
+            let p = system.rod.point(scene.material_coordinate(probe.s))?;
+            probe.positions.push(p.into());
+        }
+        Ok(())
+    }
+
     /// Records the control-point count at time `t` if it changed.
-    fn count(&mut self, t: Real, n: usize) {
+    pub(crate) fn count(&mut self, t: Real, n: usize) {
         if self.history.last().is_some_and(|h| h[1] != n as Real) {
             self.history.push([t, n as Real]);
         }
@@ -119,13 +148,19 @@ pub fn run_observed(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
 ) -> Result<RunResult, Error> {
-    match scene.solver.method {
-        Method::Static => run_static(scene, observers),
+    match (scene.solver.method, &scene.ensemble) {
+        (Method::Static, _) => run_static(scene, observers),
+        (_, Some(_)) => crate::run_ensemble::run_ensemble(scene, observers),
         _ => run_dynamic(scene, observers),
     }
 }
 
-fn frame<'a>(scene: &'a Scene, system: &'a RodSystem, time: Real, step: usize) -> Frame<'a> {
+pub(crate) fn frame<'a>(
+    scene: &'a Scene,
+    system: &'a RodSystem,
+    time: Real,
+    step: usize,
+) -> Frame<'a> {
     let total_steps = scene.step_count();
     Frame {
         scene,
@@ -136,7 +171,7 @@ fn frame<'a>(scene: &'a Scene, system: &'a RodSystem, time: Real, step: usize) -
     }
 }
 
-fn notify_finish(
+pub(crate) fn notify_finish(
     observers: &mut [&mut dyn Observer],
     frame: &Frame<'_>,
     result: RunResult,
@@ -182,9 +217,7 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     let mut sim = scene.build()?;
     let dt = scene.solver.dt.unwrap_or_default();
     let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
-    let mut cuts: Vec<_> = scene.cuts.iter().map(|c| (c.time, c.at)).collect();
-    cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut next_cut = 0;
+    let mut cuts = CutSchedule::new(scene);
     for o in observers.iter_mut() {
         o.start(&frame(scene, &sim.system, 0.0, 0))?;
     }
@@ -192,23 +225,12 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     for _ in 0..scene.step_count() {
         let step_start = Instant::now();
         let report = sim.step(dt)?;
-        let totals = &mut tally.solver;
-        totals.newton_iterations += report.solver.newton_iterations;
-        totals.symbolic_analyses += report.solver.symbolic_analyses;
-        totals.line_search_cuts += report.solver.line_search_cuts;
-        totals.unconverged_steps += usize::from(!report.solver.converged);
-        while next_cut < cuts.len() && cuts[next_cut].0 <= sim.time + 1e-9 * dt {
-            sim.cut(scene.material_coordinate(cuts[next_cut].1))?;
-            next_cut += 1;
-        }
+        tally.add(&report);
+        cuts.apply(sim.time, dt, |s| sim.cut(s))?;
         let wall = step_start.elapsed().as_secs_f64();
         tally.step_seconds.push(wall);
         tally.count(sim.time, sim.system.rod.len());
-        for probe in &mut tally.probes {
-            probe.t.push(sim.time);
-            let p = sim.system.rod.point(scene.material_coordinate(probe.s))?;
-            probe.positions.push(p.into());
-        }
+        tally.probe(scene, &sim.system, sim.time)?;
         let now = frame(scene, &sim.system, sim.time, sim.steps);
         for o in observers.iter_mut() {
             o.step(&now, &report, wall)?;
@@ -224,7 +246,7 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     )
 }
 
-fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
+pub(crate) fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
     scene
         .output
         .probes
@@ -240,7 +262,11 @@ fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Erro
         .collect()
 }
 
-fn finish(scene: &Scene, system: &RodSystem, mut tally: Tally) -> Result<RunResult, Error> {
+pub(crate) fn finish(
+    scene: &Scene,
+    system: &RodSystem,
+    mut tally: Tally,
+) -> Result<RunResult, Error> {
     let rod = &system.rod;
     let m = scene.output.samples;
     let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
@@ -265,11 +291,45 @@ fn finish(scene: &Scene, system: &RodSystem, mut tally: Tally) -> Result<RunResu
         pieces: rod.pieces(),
         control_points_history: tally.history,
         median_step_seconds: median(&mut tally.step_seconds),
+        ensemble: Vec::new(),
     })
 }
 
+/// The scene's cuts in time order, applied once each.
+pub(crate) struct CutSchedule {
+    cuts: Vec<(Real, Real)>,
+    next: usize,
+}
+
+impl CutSchedule {
+    /// The cuts of `scene` (material coordinates in m), sorted by time.
+    pub(crate) fn new(scene: &Scene) -> Self {
+        let mut cuts: Vec<_> = scene
+            .cuts
+            .iter()
+            .map(|c| (c.time, scene.material_coordinate(c.at)))
+            .collect();
+        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Self { cuts, next: 0 }
+    }
+
+    /// Calls `cut` for every cut due by `time` (a step of `dt` just ended) not yet made.
+    pub(crate) fn apply(
+        &mut self,
+        time: Real,
+        dt: Real,
+        mut cut: impl FnMut(Real) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        while self.next < self.cuts.len() && self.cuts[self.next].0 <= time + 1e-9 * dt {
+            cut(self.cuts[self.next].1)?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+}
+
 /// Median of `values` (0 if empty); reorders them.
-fn median(values: &mut [Real]) -> Real {
+pub(crate) fn median(values: &mut [Real]) -> Real {
     if values.is_empty() {
         return 0.0;
     }

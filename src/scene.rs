@@ -6,6 +6,7 @@
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
+pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
 use crate::Error;
 use serde::Deserialize;
 
@@ -34,6 +35,8 @@ pub struct Scene {
     /// Cuts at given times.
     #[serde(default)]
     pub cuts: Vec<CutSpec>,
+    /// Many copies of the rod with varied parameters, run together.
+    pub ensemble: Option<EnsembleSpec>,
 }
 
 /// `[rod]`.
@@ -258,6 +261,13 @@ impl Scene {
         }
         for (i, &p) in self.output.probes.iter().enumerate() {
             fraction(&format!("output.probes[{i}]"), p)?;
+        }
+        if let Some(e) = &self.ensemble {
+            e.validate()?;
+            if self.solver.method == Method::Static {
+                let reason = "an ensemble needs a time-stepping solver.method";
+                return Err(Error::field("ensemble.count", e.count, reason));
+            }
         }
         crate::scene_adapt::validate(
             self.adaptivity.as_ref(),
