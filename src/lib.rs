@@ -33,6 +33,8 @@
 //! ```
 #![warn(missing_docs)]
 
+#[cfg(feature = "parallel")]
+pub mod bench;
 mod build;
 mod ensemble;
 mod error;

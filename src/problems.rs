@@ -13,7 +13,7 @@ use crate::{Error, RodSystem, RunResult, Scene, Simulation};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use splinerod_core::{BSplineSpace, Material, Pin, Real, Rod};
-use splinerod_energies::Stretching;
+use splinerod_energies::{Gravity, Stretching};
 use splinerod_integrators::Integrator;
 
 const CATENARY_JSON: &str = include_str!("../tests/data/catenary_L1_D0.8_mu0.1_EA100.json");
@@ -173,4 +173,23 @@ impl Pluck {
         let (first, last) = (peaks.first()?, peaks.last()?);
         (peaks.len() >= 2).then(|| 1.0 - (last / first).powf(1.0 / (peaks.len() - 1) as Real))
     }
+}
+
+/// A cable of `n` clamped cubic control points (L = 1 m, μ = 0.1 kg/m, axial stiffness
+/// `ea`), straight between pins `span` metres apart along x, under gravity: the
+/// benchmark rod (span > L starts it stretched, < L compressed).
+pub fn pinned_cable(n: usize, span: Real, ea: Real) -> Result<RodSystem, Error> {
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, n, 1.0)?;
+    let end = Vector3::new(span, 0.0, 0.0);
+    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?;
+    let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
+    Ok(RodSystem::new(rod)
+        .with_energy(Stretching::new(ea)?)
+        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0))?)
+        .with_pin(pins[0])
+        .with_pin(pins[1]))
 }

@@ -3,6 +3,7 @@
 //! * `splinerod run SCENE.toml [--json OUT] [--stats OUT.csv] [--frames DIR [--every K]
 //!   [--camera xy|xz|yz|oblique] [--svg] [--polygon] [--gif OUT.gif]] [--vtk DIR]`
 //! * `splinerod report [--quick] --out DIR`
+//! * `splinerod bench [--quick] [--json OUT]`
 //!
 //! Errors print one line naming the field or file and exit with code 2.
 
@@ -35,6 +36,15 @@ enum Command {
         /// Directory for report.md and its plots.
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Measures step times, O(n) scaling, ensemble throughput and memory on this machine.
+    Bench {
+        /// Fewer repetitions and a smaller ensemble (under 15 s).
+        #[arg(long)]
+        quick: bool,
+        /// Where to write the figures as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
     },
 }
 
@@ -93,7 +103,54 @@ fn execute(cli: Cli) -> Result<(), Error> {
             );
             Ok(())
         }
+        Command::Bench { quick, json } => bench(quick, json),
     }
+}
+
+#[cfg(feature = "parallel")]
+fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
+    let b = splinerod::bench::measure(quick)?;
+    println!(
+        "one implicit Euler step, 16 control points: {:.2} µs",
+        b.step_us_16
+    );
+    println!(
+        "one static Newton iteration, 16 control points: {:.2} µs",
+        b.static_newton_us_16
+    );
+    for (n, ns) in &b.per_cp_ns {
+        println!("per control point per step at {n}: {ns:.0} ns");
+    }
+    println!(
+        "flatness (max/min per control point): {:.3}",
+        b.per_cp_flatness
+    );
+    println!(
+        "ensemble of 16-point rods: {:.0} rod-steps/s on 1 thread, {:.0} on {} ({:.0} % efficiency)",
+        b.ensemble_rod_steps_per_s_1,
+        b.ensemble_rod_steps_per_s_all,
+        b.threads,
+        100.0 * b.parallel_efficiency
+    );
+    println!("memory: {:.0} bytes per control point", b.bytes_per_cp);
+    println!(
+        "stiff catenary (EA = 1e4) settled to {:.2e} m with {} control points in {} steps, {:.3} s",
+        b.stiff_catenary.1, b.stiff_catenary.0, b.stiff_catenary.2, b.stiff_catenary_settle_s
+    );
+    if let Some(path) = json {
+        let text = serde_json::to_string_pretty(&b).map_err(|e| Error::Scene(e.to_string()))?;
+        std::fs::write(&path, text).map_err(|source| Error::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+#[cfg(not(feature = "parallel"))]
+fn bench(_quick: bool, _json: Option<PathBuf>) -> Result<(), Error> {
+    Err(Error::Scene("bench needs the `parallel` feature".into()))
 }
 
 /// The observers the flags ask for, all checked before anything runs.

@@ -1,0 +1,222 @@
+//! `splinerod bench [--quick] [--json OUT]`: the figures of speed a user can reproduce on
+//! their own machine (medians, so one noisy sample does not move them):
+//!
+//! * one implicit Euler step (1 Newton iteration, no line search; stretching, gravity,
+//!   two end pins) of a 16-point cable, and one Newton iteration of the static solver;
+//! * time per control point per step at 1 000, 10 000 and 100 000 points and the ratio of
+//!   the largest to the smallest (O(n) means close to 1);
+//! * ensemble throughput, rod-steps per second, for many 16-point cables on 1 thread and
+//!   on all threads, and the parallel efficiency;
+//! * resident memory per control point of the 100 000-point cable and its solver;
+//! * wall time to settle the stiff (EA = 10⁴ N) catenary, released straight, to within
+//!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements).
+
+use crate::problems::pinned_cable;
+use crate::{Ensemble, Error, RodSystem, Simulation};
+use serde::Serialize;
+use splinerod_core::Real;
+use splinerod_integrators::{ImplicitEuler, Integrator, NewtonParams, StaticParams, StaticSolver};
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Everything `bench` measures (JSON keys as in the issue).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct BenchResult {
+    /// Median implicit Euler step, 16 control points, µs.
+    pub step_us_16: Real,
+    /// Median static Newton iteration, 16 control points, µs.
+    pub static_newton_us_16: Real,
+    /// Median step time per control point, ns, by size.
+    pub per_cp_ns: BTreeMap<String, Real>,
+    /// Largest over smallest of `per_cp_ns`.
+    pub per_cp_flatness: Real,
+    /// Ensemble rod-steps per second on one thread.
+    pub ensemble_rod_steps_per_s_1: Real,
+    /// Ensemble rod-steps per second on all threads.
+    pub ensemble_rod_steps_per_s_all: Real,
+    /// `all / (1 · threads)`.
+    pub parallel_efficiency: Real,
+    /// Threads used for `all`.
+    pub threads: usize,
+    /// Resident bytes per control point of the 100 000-point cable (peak growth).
+    pub bytes_per_cp: Real,
+    /// Wall time to settle the EA = 10⁴ N catenary to 2.2e-5 m, s.
+    pub stiff_catenary_settle_s: Real,
+    /// Control points used for that, the error reached (m) and the steps taken (dt = 0.02 s).
+    pub stiff_catenary: (usize, Real, usize),
+}
+
+fn one_iteration() -> Result<Box<dyn Integrator>, Error> {
+    let p = NewtonParams {
+        max_iterations: 1,
+        line_search: false,
+        ..NewtonParams::default()
+    };
+    Ok(Box::new(ImplicitEuler::new(p)?))
+}
+
+fn median(mut v: Vec<Real>) -> Real {
+    v.sort_by(Real::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Median wall time (s) of one step of an `n`-point stretched cable.
+fn step_seconds(n: usize, reps: usize) -> Result<Real, Error> {
+    let mut sim = Simulation::new(pinned_cable(n, 1.05, 100.0)?, one_iteration()?);
+    for _ in 0..5 {
+        sim.step(1e-3)?;
+    }
+    let mut times = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        let t = Instant::now();
+        sim.step(1e-3)?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    Ok(median(times))
+}
+
+fn static_newton_seconds(reps: usize) -> Result<Real, Error> {
+    let mut solver = StaticSolver::new(StaticParams::default())?;
+    let mut times = Vec::with_capacity(reps);
+    for _ in 0..reps {
+        let mut system = pinned_cable(16, 0.8, 100.0)?;
+        let t = Instant::now();
+        let stats = solver.solve(&mut system)?;
+        times.push(t.elapsed().as_secs_f64() / stats.newton_iterations.max(1) as Real);
+    }
+    Ok(median(times))
+}
+
+/// A field of `/proc/self/status` in bytes (Linux; 0 elsewhere).
+fn status_bytes(field: &str) -> Real {
+    let text = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let line = text.lines().find(|l| l.starts_with(field));
+    let kb = line.and_then(|l| l.split_whitespace().nth(1)?.parse::<Real>().ok());
+    kb.unwrap_or(0.0) * 1024.0
+}
+
+/// Median time per control point (ns) at `n`, and for the largest size the resident
+/// growth per control point (bytes).
+fn per_cp(n: usize, reps: usize) -> Result<(Real, Real), Error> {
+    let before = status_bytes("VmRSS:");
+    let ns = step_seconds(n, reps)? * 1e9 / n as Real;
+    let grown = status_bytes("VmHWM:") - before;
+    Ok((ns, grown / n as Real))
+}
+
+/// Rod-steps per second of `count` 16-point cables stepped together on `threads` threads.
+fn ensemble_rate(count: usize, steps: usize, threads: usize) -> Result<Real, Error> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Scene(format!("thread pool: {e}")))?;
+    pool.install(|| {
+        let members = (0..count)
+            .map(|_| {
+                Ok(Simulation::new(
+                    pinned_cable(16, 1.05, 100.0)?,
+                    one_iteration()?,
+                ))
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        let mut ensemble = Ensemble::new(members);
+        ensemble.step(1e-3)?;
+        let t = Instant::now();
+        for _ in 0..steps {
+            ensemble.step(1e-3)?;
+        }
+        Ok((count * steps) as Real / t.elapsed().as_secs_f64())
+    })
+}
+
+/// Settles the EA = 10⁴ N catenary released straight with damped implicit Euler, at the
+/// coarsest resolution whose equilibrium is within 1.5e-5 m of a 64-point reference;
+/// returns (wall seconds to reach 2.2e-5 m of it and rest, control points, error, steps).
+fn stiff_catenary() -> Result<(Real, usize, Real, usize), Error> {
+    const TARGET: Real = 2.2e-5;
+    // Static reference by continuation: the soft cable's equilibrium starts the stiff solve.
+    let solve = |n: usize| -> Result<RodSystem, Error> {
+        let mut soft = pinned_cable(n, 0.8, 100.0)?;
+        StaticSolver::new(StaticParams::default())?.solve(&mut soft)?;
+        let mut system = pinned_cable(n, 0.8, 1e4)?;
+        system.rod.positions.clone_from(&soft.rod.positions);
+        StaticSolver::new(StaticParams::default())?.solve(&mut system)?;
+        Ok(system)
+    };
+    let reference = solve(64)?;
+    let distance = |system: &RodSystem| -> Result<Real, Error> {
+        (0..=40).try_fold(0.0, |worst: Real, k| {
+            let s = k as Real / 40.0;
+            let d = (system.rod.point(s)? - reference.rod.point(s)?).norm();
+            Ok(worst.max(d))
+        })
+    };
+    let mut n = 12;
+    while n < 64 && distance(&solve(n)?)? > 1.5e-5 {
+        n += 4;
+    }
+    let mut system = pinned_cable(n, 0.8, 1e4)?;
+    system.rod.damping = 4.0;
+    let mut sim = Simulation::new(
+        system,
+        Box::new(ImplicitEuler::new(NewtonParams::default())?),
+    );
+    let start = Instant::now();
+    let mut error = Real::INFINITY;
+    while sim.time < 30.0 {
+        sim.step(0.02)?;
+        error = distance(&sim.system)?;
+        let speed = sim
+            .system
+            .rod
+            .velocities
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, Real::max);
+        if error <= TARGET && speed < 1e-3 {
+            break;
+        }
+    }
+    Ok((start.elapsed().as_secs_f64(), n, error, sim.steps))
+}
+
+/// Runs every measurement (`quick`: fewer repetitions and a smaller ensemble).
+pub fn measure(quick: bool) -> Result<BenchResult, Error> {
+    let scale = |full: usize, short: usize| if quick { short } else { full };
+    let step_us_16 = step_seconds(16, scale(20_000, 2_000))? * 1e6;
+    let static_newton_us_16 = static_newton_seconds(scale(200, 20))? * 1e6;
+    let mut per_cp_ns = BTreeMap::new();
+    let mut bytes_per_cp = 0.0;
+    for (n, reps) in [
+        (1_000, scale(200, 20)),
+        (10_000, scale(40, 5)),
+        (100_000, scale(10, 3)),
+    ] {
+        let (ns, bytes) = per_cp(n, reps)?;
+        per_cp_ns.insert(n.to_string(), ns);
+        bytes_per_cp = bytes;
+    }
+    let (lo, hi) = per_cp_ns
+        .values()
+        .fold((Real::INFINITY, 0.0), |(a, b): (Real, Real), &v| {
+            (a.min(v), b.max(v))
+        });
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (count, steps) = (scale(10_000, 1_000), scale(10, 3));
+    let one = ensemble_rate(count, steps, 1)?;
+    let all = ensemble_rate(count, steps, threads)?;
+    let (settle, n, error, steps) = stiff_catenary()?;
+    Ok(BenchResult {
+        step_us_16,
+        static_newton_us_16,
+        per_cp_ns,
+        per_cp_flatness: hi / lo,
+        ensemble_rod_steps_per_s_1: one,
+        ensemble_rod_steps_per_s_all: all,
+        parallel_efficiency: all / (one * threads as Real),
+        threads,
+        bytes_per_cp,
+        stiff_catenary_settle_s: settle,
+        stiff_catenary: (n, error, steps),
+    })
+}

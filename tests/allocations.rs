@@ -1,0 +1,73 @@
+//! No heap allocation inside a time step once the workspaces are sized: a counting global
+//! allocator (per thread) watches 100 steps of each integrator after a warm-up.
+
+use splinerod::prelude::*;
+use splinerod::problems::pinned_cable;
+use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
+use std::cell::Cell;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: defers every operation to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { SystemAlloc.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { SystemAlloc.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { SystemAlloc.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations_during(f: impl FnOnce()) -> usize {
+    let before = ALLOCATIONS.with(|c| c.get());
+    f();
+    ALLOCATIONS.with(|c| c.get()) - before
+}
+
+type MakeIntegrator = fn() -> Box<dyn Integrator>;
+
+#[test]
+fn steps_do_not_allocate_after_warm_up() {
+    let integrators: [(&str, MakeIntegrator); 3] = [
+        ("implicit-euler", || {
+            Box::new(ImplicitEuler::new(NewtonParams::default()).expect("p"))
+        }),
+        ("implicit-midpoint", || {
+            Box::new(ImplicitMidpoint::new(NewtonParams::default()).expect("p"))
+        }),
+        ("bdf2", || {
+            Box::new(Bdf2::new(NewtonParams::default()).expect("p"))
+        }),
+    ];
+    for n in [16, 1000] {
+        for (name, make) in integrators {
+            // Slightly stretched, so every step converges the same way.
+            let system = pinned_cable(n, 1.05, 100.0).expect("cable");
+            let mut sim = Simulation::new(system, make());
+            for _ in 0..10 {
+                sim.step(1e-3).expect("warm-up step");
+            }
+            let count = allocations_during(|| {
+                for _ in 0..100 {
+                    sim.step(1e-3).expect("step");
+                }
+            });
+            assert_eq!(
+                count, 0,
+                "{name}, {n} control points: {count} allocations in 100 steps"
+            );
+        }
+    }
+}
