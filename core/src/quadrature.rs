@@ -99,7 +99,8 @@ pub struct QuadratureTable {
     order: usize,
     s: Vec<Real>,
     weight: Vec<Real>,
-    first: Vec<usize>,
+    /// First non-zero basis function per point (32 bits: rods of up to 4·10⁹ points).
+    first: Vec<u32>,
     value: Vec<Real>,
     d1: Vec<Real>,
     d2: Vec<Real>,
@@ -131,7 +132,7 @@ impl QuadratureTable {
         let o = self.order.min(MAX_ORDER);
         self.s.push(s);
         self.weight.push(weight);
-        self.first.push(b.first);
+        self.first.push(b.first as u32);
         self.value.extend_from_slice(&b.value[..o]);
         self.d1.extend_from_slice(&b.d1[..o]);
         self.d2.extend_from_slice(&b.d2[..o]);
@@ -165,7 +166,7 @@ impl QuadratureTable {
         QuadPoint {
             s: self.s[p],
             weight: self.weight[p],
-            first: self.first[p],
+            first: self.first[p] as usize,
             value: &self.value[range.clone()],
             d1: &self.d1[range.clone()],
             d2: &self.d2[range],
@@ -205,7 +206,7 @@ impl QuadratureTable {
         }
         let shift = region.new_functions.len() as isize - region.old_functions.len() as isize;
         for f in &mut self.first[old.end..] {
-            *f = f.wrapping_add_signed(shift);
+            *f = f.wrapping_add_signed(shift as i32);
         }
         let o = self.order;
         self.s.splice(old.clone(), fresh.s);

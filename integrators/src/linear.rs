@@ -24,8 +24,8 @@ use splinerod_core::{BlockBanded, Real};
 #[derive(Default)]
 pub struct SparseCholesky {
     key: Option<(u64, usize, usize)>,
-    pattern: Option<SymbolicSparseColMat<usize>>,
-    symbolic: Option<SymbolicCholesky<usize>>,
+    pattern: Option<SymbolicSparseColMat<Index>>,
+    symbolic: Option<SymbolicCholesky<Index>>,
     values: Vec<Real>,
     factor: Vec<Real>,
     memory: Option<MemBuffer>,
@@ -43,20 +43,37 @@ impl std::fmt::Debug for SparseCholesky {
     }
 }
 
+/// Sparse index type: 32 bits halve the pattern's memory; rods up to ~10⁸ nonzeros.
+type Index = u32;
+
 /// First row of column `j` in the upper block band of block bandwidth `bw`.
 fn first_row(j: usize, bw: usize) -> usize {
     (j / 3).saturating_sub(bw) * 3
 }
 
-fn upper_band_pattern(dofs: usize, bw: usize) -> SymbolicSparseColMat<usize> {
-    let mut col_ptr = Vec::with_capacity(dofs + 1);
-    let mut rows = Vec::new();
+fn upper_band_pattern(
+    dofs: usize,
+    bw: usize,
+) -> Result<SymbolicSparseColMat<Index>, IntegratorError> {
+    let too_large = IntegratorError::TooLarge {
+        what: "the 32-bit sparse pattern",
+        dofs,
+        limit: Index::MAX as usize / (3 * (bw + 1)),
+    };
+    let nnz: usize = (0..dofs).map(|j| j + 1 - first_row(j, bw)).sum();
+    if nnz > Index::MAX as usize {
+        return Err(too_large);
+    }
+    let mut col_ptr: Vec<Index> = Vec::with_capacity(dofs + 1);
+    let mut rows: Vec<Index> = Vec::with_capacity(nnz);
     col_ptr.push(0);
     for j in 0..dofs {
-        rows.extend(first_row(j, bw)..=j);
-        col_ptr.push(rows.len());
+        rows.extend((first_row(j, bw)..=j).map(|i| i as Index));
+        col_ptr.push(rows.len() as Index);
     }
-    SymbolicSparseColMat::new_checked(dofs, dofs, col_ptr, None, rows)
+    Ok(SymbolicSparseColMat::new_checked(
+        dofs, dofs, col_ptr, None, rows,
+    ))
 }
 
 impl SparseCholesky {
@@ -109,7 +126,7 @@ impl SparseCholesky {
     fn analyse(&mut self, n: usize, bw: usize) -> Result<(), IntegratorError> {
         self.analyses += 1;
         let dofs = 3 * n;
-        let pattern = upper_band_pattern(dofs, bw);
+        let pattern = upper_band_pattern(dofs, bw)?;
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
             ..Default::default()
@@ -192,7 +209,7 @@ impl SparseCholesky {
         self.reserve_rhs(k);
         if let (Some(symbolic), Some(memory)) = (&self.symbolic, &mut self.memory) {
             let x = MatMut::from_column_major_slice_mut(rhs, n, k);
-            LltRef::<usize, Real>::new(symbolic, &self.factor).solve_in_place_with_conj(
+            LltRef::<Index, Real>::new(symbolic, &self.factor).solve_in_place_with_conj(
                 Conj::No,
                 x,
                 Par::Seq,
