@@ -10,7 +10,9 @@
 
 use crate::Energy;
 use nalgebra::{Rotation3, Vector3};
-use splinerod_core::{BSplineSpace, BasisSpace, BlockBanded, HessianKind, Material, Real, Rod};
+use splinerod_core::{
+    BSplineSpace, BasisSpace, BlockBanded, CoreError, HessianKind, Material, Real, Rod,
+};
 
 /// Which invariance under rigid motions the energy has.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,7 +69,8 @@ pub const EXACT_TOLERANCE: Real = 1e-11;
 /// naming the first failed check with its figures.
 pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report, String> {
     let mut report = Report::default();
-    for (label, rod) in test_rods() {
+    let setup = |e: CoreError| format!("{}: test setup failed: {e}", energy.name());
+    for (label, rod) in test_rods().map_err(setup)? {
         let fail =
             |what: &str, value: Real| format!("{}: {what} = {value:e} on {label}", energy.name());
         let measure = |value: Real, tol: Real, what: &str, worst: &mut Real| {
@@ -103,14 +106,14 @@ pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report,
             &mut report.rigid,
         )?;
         measure(
-            refinement_error(energy, &rod),
+            refinement_error(energy, &rod).map_err(setup)?,
             expect.knot_insertion,
             "knot-insertion change",
             &mut report.refinement,
         )?;
     }
     if expect.zero_at_rest {
-        report.rest = rest_error(energy);
+        report.rest = rest_error(energy).map_err(setup)?;
         if report.rest > EXACT_TOLERANCE {
             return Err(format!(
                 "{}: energy or force at rest = {:e}",
@@ -122,24 +125,24 @@ pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report,
     Ok(report)
 }
 
-fn spaces() -> Vec<(String, BSplineSpace)> {
+fn spaces() -> Result<Vec<(String, BSplineSpace)>, CoreError> {
     let mut out = Vec::new();
     for d in 2..=4 {
         out.push((
             format!("clamped d={d}"),
-            BSplineSpace::clamped_uniform(d, d + 5, 1.3).unwrap(),
+            BSplineSpace::clamped_uniform(d, d + 5, 1.3)?,
         ));
         out.push((
             format!("uniform d={d}"),
-            BSplineSpace::uniform(d, d + 4, 1.3).unwrap(),
+            BSplineSpace::uniform(d, d + 4, 1.3)?,
         ));
-        let mut irregular = BSplineSpace::clamped_uniform(d, d + 3, 1.3).unwrap();
+        let mut irregular = BSplineSpace::clamped_uniform(d, d + 3, 1.3)?;
         for s in [0.2, 0.5, 0.5, 0.71] {
-            irregular.insert_knot(s).unwrap();
+            irregular.insert_knot(s)?;
         }
         out.push((format!("irregular d={d}"), irregular));
     }
-    out
+    Ok(out)
 }
 
 /// Deterministic pseudo-random numbers in [-1, 1].
@@ -147,32 +150,32 @@ fn noise(i: usize, k: usize) -> Real {
     ((i * 7919 + k * 104_729) as Real * 0.618_033_988_75).sin()
 }
 
-fn rod_on(space: &BSplineSpace, stretch: Real, wiggle: Real) -> Rod {
+fn rod_on(space: &BSplineSpace, stretch: Real, wiggle: Real) -> Result<Rod, CoreError> {
     let material = Material {
         rest_length: 1.3,
         linear_density: 0.2,
     };
     let end = Vector3::new(1.3 * stretch, 0.0, 0.0);
-    let mut rod = Rod::straight(material, Box::new(space.clone()), Vector3::zeros(), end).unwrap();
+    let mut rod = Rod::straight(material, Box::new(space.clone()), Vector3::zeros(), end)?;
     for (i, q) in rod.positions.iter_mut().enumerate() {
         *q += Vector3::new(noise(i, 0), noise(i, 1), noise(i, 2)) * wiggle;
     }
-    rod
+    Ok(rod)
 }
 
 /// Labelled rods in varied states.
-pub fn test_rods() -> Vec<(String, Rod)> {
+pub fn test_rods() -> Result<Vec<(String, Rod)>, CoreError> {
     let mut out = Vec::new();
-    for (name, space) in spaces() {
+    for (name, space) in spaces()? {
         for (state, stretch, wiggle) in [
             ("stretched", 1.15, 0.02),
             ("compressed", 0.7, 0.05),
             ("bent", 1.0, 0.3),
         ] {
-            out.push((format!("{name}, {state}"), rod_on(&space, stretch, wiggle)));
+            out.push((format!("{name}, {state}"), rod_on(&space, stretch, wiggle)?));
         }
     }
-    out
+    Ok(out)
 }
 
 fn gradient_of(energy: &dyn Energy, rod: &Rod) -> Vec<Vector3<Real>> {
@@ -281,11 +284,11 @@ fn rigid_error(energy: &dyn Energy, rod: &Rod, rigid: RigidInvariance) -> Real {
     (e1 - e0).abs() / e0.abs().max(Real::MIN_POSITIVE)
 }
 
-fn refinement_error(energy: &dyn Energy, rod: &Rod) -> Real {
+fn refinement_error(energy: &dyn Energy, rod: &Rod) -> Result<Real, CoreError> {
     let mut refined = rod.clone();
     let mut maps = Vec::new();
     for s in [0.123, 0.5, 1.0001] {
-        maps.push(refined.insert_knot(s).unwrap());
+        maps.push(refined.insert_knot(s)?);
     }
     let (e0, e1) = (energy.energy(rod), energy.energy(&refined));
     // Pull the refined gradient back: ∇E_0 = β_1ᵀ β_2ᵀ β_3ᵀ ∇E_1.
@@ -302,15 +305,15 @@ fn refinement_error(energy: &dyn Energy, rod: &Rod) -> Real {
         .zip(&g0)
         .map(|(a, b)| (a - b).amax())
         .fold(0.0, Real::max);
-    ((e1 - e0).abs() / e0.abs().max(Real::MIN_POSITIVE)).max(dg / scale)
+    Ok(((e1 - e0).abs() / e0.abs().max(Real::MIN_POSITIVE)).max(dg / scale))
 }
 
-fn rest_error(energy: &dyn Energy) -> Real {
-    let space = BSplineSpace::clamped_uniform(3, 9, 1.3).unwrap();
-    let rest = rod_on(&space, 1.0, 0.0);
+fn rest_error(energy: &dyn Energy) -> Result<Real, CoreError> {
+    let space = BSplineSpace::clamped_uniform(3, 9, 1.3)?;
+    let rest = rod_on(&space, 1.0, 0.0)?;
     // Stretched and bent, so that every kind of energy has a non-zero scale.
-    let stretched = rod_on(&space, 1.1, 0.05);
+    let stretched = rod_on(&space, 1.1, 0.05)?;
     let scale_e = energy.energy(&stretched).abs().max(Real::MIN_POSITIVE);
     let scale_g = max_norm(&gradient_of(energy, &stretched)).max(Real::MIN_POSITIVE);
-    (energy.energy(&rest).abs() / scale_e).max(max_norm(&gradient_of(energy, &rest)) / scale_g)
+    Ok((energy.energy(&rest).abs() / scale_e).max(max_norm(&gradient_of(energy, &rest)) / scale_g))
 }

@@ -21,10 +21,10 @@
 //! let basis = BSplineSpace::clamped_uniform(3, 10, 1.0)?;
 //! // Stretched to 1.2 times its rest length along x.
 //! let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), Vector3::new(1.2, 0.0, 0.0))?;
-//! let stretching = Stretching::new(100.0).unwrap();
+//! let stretching = Stretching::new(100.0)?;
 //! // W = (EA/8)(γ² − 1)² L with γ = 1.2.
 //! assert!((stretching.energy(&rod) - 100.0 / 8.0 * (1.44f64 - 1.0).powi(2)).abs() < 1e-12);
-//! let gravity = Gravity::new(Vector3::new(0.0, -9.81, 0.0)).unwrap();
+//! let gravity = Gravity::new(Vector3::new(0.0, -9.81, 0.0))?;
 //! assert!(gravity.energy(&rod).abs() < 1e-15); // on the line y = 0
 //! # Ok::<(), splinerod_core::CoreError>(())
 //! ```
