@@ -1,14 +1,14 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
-use crate::scene::{KnotsSpec, Method, Scene};
+use crate::scene::{KnotsSpec, LinearSolverSpec, Method, Scene};
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
 use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
 use splinerod_energies::{Bending, Clamp, Gravity, Stretching};
 use splinerod_integrators::{
-    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams, StaticParams,
+    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, LinearSolverKind, NewtonParams, StaticParams,
 };
 
 impl Scene {
@@ -142,6 +142,15 @@ impl Scene {
             max_iterations: self.solver.newton_iterations.unwrap_or(d.max_iterations),
             tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
             line_search: self.solver.line_search,
+            linear_solver: self.linear_solver(),
+        }
+    }
+
+    /// The factorisation named by `solver.linear_solver`.
+    pub fn linear_solver(&self) -> LinearSolverKind {
+        match self.solver.linear_solver {
+            LinearSolverSpec::Banded => LinearSolverKind::Banded,
+            LinearSolverSpec::Sparse => LinearSolverKind::Sparse,
         }
     }
 
@@ -151,6 +160,7 @@ impl Scene {
         StaticParams {
             max_iterations: self.solver.newton_iterations.unwrap_or(d.max_iterations),
             tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
+            linear_solver: self.linear_solver(),
         }
     }
 

@@ -158,6 +158,20 @@ pub struct SolverSpec {
     /// Line search on the incremental potential. Default true.
     #[serde(default = "default_true")]
     pub line_search: bool,
+    /// `"banded"` (default) or `"sparse"` (faer): the factorisation of Newton matrices.
+    #[serde(default)]
+    pub linear_solver: LinearSolverSpec,
+}
+
+/// `solver.linear_solver`.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum LinearSolverSpec {
+    /// Dense 3×3-block band Cholesky.
+    #[default]
+    Banded,
+    /// faer's sparse Cholesky.
+    Sparse,
 }
 
 fn default_true() -> bool {

@@ -91,6 +91,7 @@ fn pulling_one_piece_leaves_the_other_bit_identical() {
         max_iterations: 3,
         tolerance: 1e-300,
         line_search: false,
+        ..NewtonParams::default()
     };
     let (alone, pulled) = (run_after_cut(fixed, false), run_after_cut(fixed, true));
     assert_eq!(

@@ -8,7 +8,7 @@
 //! is solved as \\(y = -A^{-1} r\\), \\(Y = A^{-1} G^T\\), \\(S = G Y\\) (3k × 3k for k pins),
 //! \\(\mu = S^{-1}(c - G x - G y)\\), \\(\Delta x = y + Y \mu\\): `3k + 1` back-substitutions.
 
-use crate::linear::SparseCholesky;
+use crate::linear::LinearSolver;
 use crate::point_pins::PointPins;
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
@@ -106,7 +106,7 @@ impl Constraints {
     }
 
     /// Computes `Y = A⁻¹ Gᵀ` and factorises `S = G Y` for the pins not eliminated.
-    pub fn factor(&mut self, solver: &mut SparseCholesky) -> Result<(), IntegratorError> {
+    pub fn factor(&mut self, solver: &mut LinearSolver) -> Result<(), IntegratorError> {
         let (m, dofs) = (3 * self.general.len(), 3 * self.n);
         if m == 0 {
             return Ok(());

@@ -25,6 +25,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod banded_cholesky;
 mod bdf2;
 pub mod conformance;
 mod error;
@@ -38,9 +39,11 @@ pub mod newton;
 mod point_pins;
 mod statics;
 
+pub use banded_cholesky::BandedCholesky;
 pub use bdf2::Bdf2;
 pub use error::IntegratorError;
 pub use implicit_euler::ImplicitEuler;
+pub use linear::LinearSolverKind;
 pub use midpoint::ImplicitMidpoint;
 pub use newton::NewtonParams;
 pub use statics::{StaticParams, StaticSolver};

@@ -11,7 +11,7 @@
 //! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
 
 use crate::kkt::Constraints;
-use crate::linear::SparseCholesky;
+use crate::linear::{LinearSolver, LinearSolverKind};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -27,6 +27,8 @@ pub struct NewtonParams {
     pub tolerance: Real,
     /// Backtrack on the merit function when a full step does not decrease it. Default on.
     pub line_search: bool,
+    /// The factorisation of the Newton matrix. Default banded.
+    pub linear_solver: LinearSolverKind,
 }
 
 impl Default for NewtonParams {
@@ -35,6 +37,7 @@ impl Default for NewtonParams {
             max_iterations: 10,
             tolerance: 1e-10,
             line_search: true,
+            linear_solver: LinearSolverKind::Banded,
         }
     }
 }
@@ -96,7 +99,7 @@ pub struct NewtonWorkspace {
     dx: Vec<Vector3<Real>>,
     flat: Vec<Real>,
     matrix: BlockBanded,
-    solver: SparseCholesky,
+    solver: LinearSolver,
     constraints: Constraints,
     multipliers: Vec<Vector3<Real>>,
 }
@@ -127,6 +130,7 @@ pub fn solve(
     ws: &mut NewtonWorkspace,
 ) -> Result<StepStats, IntegratorError> {
     let n = x.len();
+    ws.solver.kind = params.linear_solver;
     ws.resize(n, system.pins().len());
     ws.constraints.setup(system.rod(), system.pins())?;
     for (p, pin) in system.pins().iter().enumerate() {
@@ -169,7 +173,7 @@ fn newton_direction(
         ws.constraints.add_gram(rho, &mut ws.matrix);
         ws.constraints.points.eliminate_matrix(&mut ws.matrix);
         match ws.solver.factor(&ws.matrix, epoch) {
-            Ok(_) => break rho,
+            Ok(()) => break rho,
             Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
                 return Err(IntegratorError::NonFinite {
                     what: "Newton matrix",

@@ -11,6 +11,7 @@
 //! [`crate::newton::NewtonProblem::augmentation`]) makes the matrix definite without
 //! changing the constrained step.
 
+use crate::linear::LinearSolverKind;
 use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -24,6 +25,8 @@ pub struct StaticParams {
     /// Converged when a full, unregularised Newton step moves no point by more than
     /// `tolerance · rest_length`. Default 1e-12.
     pub tolerance: Real,
+    /// The factorisation of the Newton matrix. Default banded.
+    pub linear_solver: LinearSolverKind,
 }
 
 impl Default for StaticParams {
@@ -31,6 +34,7 @@ impl Default for StaticParams {
         Self {
             max_iterations: 200,
             tolerance: 1e-12,
+            linear_solver: LinearSolverKind::Banded,
         }
     }
 }
@@ -100,6 +104,7 @@ fn newton_params(p: &StaticParams) -> NewtonParams {
         max_iterations: p.max_iterations,
         tolerance: p.tolerance,
         line_search: true,
+        linear_solver: p.linear_solver,
     }
 }
 

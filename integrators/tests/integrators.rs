@@ -6,8 +6,8 @@
 use nalgebra::Vector3;
 use splinerod_core::{Pin, Real};
 use splinerod_integrators::{
-    modal, ImplicitEuler, Integrator, IntegratorError, NewtonParams, StaticParams, StaticSolver,
-    System,
+    modal, ImplicitEuler, Integrator, IntegratorError, LinearSolverKind, NewtonParams,
+    StaticParams, StaticSolver, System,
 };
 
 /// The suite's test string (quadratic energy), under its historical name here.
@@ -128,16 +128,52 @@ fn a_non_finite_step_is_rolled_back() {
 
 #[test]
 fn symbolic_analysis_only_after_a_basis_change() {
-    let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -1.0, 0.0))
-        .unwrap()
-        .pin_ends()
-        .unwrap();
-    let mut euler = ImplicitEuler::new(NewtonParams::default()).unwrap();
-    assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 1);
-    assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 0);
-    sys.rod.insert_knot(0.77).unwrap();
-    assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 1);
-    assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 0);
+    // The sparse (faer) path analyses once per basis; the banded path never needs to.
+    for (kind, analyses) in [(LinearSolverKind::Sparse, 1), (LinearSolverKind::Banded, 0)] {
+        let mut sys = Quadratic::new(8, 10.0, Vector3::new(0.0, -1.0, 0.0))
+            .unwrap()
+            .pin_ends()
+            .unwrap();
+        let params = NewtonParams {
+            linear_solver: kind,
+            ..NewtonParams::default()
+        };
+        let mut euler = ImplicitEuler::new(params).unwrap();
+        assert_eq!(
+            euler.step(&mut sys, 0.01).unwrap().symbolic_analyses,
+            analyses
+        );
+        assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 0);
+        sys.rod.insert_knot(0.77).unwrap();
+        assert_eq!(
+            euler.step(&mut sys, 0.01).unwrap().symbolic_analyses,
+            analyses
+        );
+        assert_eq!(euler.step(&mut sys, 0.01).unwrap().symbolic_analyses, 0);
+    }
+}
+
+#[test]
+fn banded_and_sparse_factorisations_agree() {
+    let run = |kind| {
+        let mut sys = Quadratic::new(12, 10.0, Vector3::new(0.0, -9.81, 0.0))
+            .unwrap()
+            .pin_ends()
+            .unwrap();
+        let params = NewtonParams {
+            linear_solver: kind,
+            ..NewtonParams::default()
+        };
+        let mut euler = ImplicitEuler::new(params).unwrap();
+        for _ in 0..20 {
+            euler.step(&mut sys, 0.01).unwrap();
+        }
+        sys.rod.positions
+    };
+    let (banded, sparse) = (run(LinearSolverKind::Banded), run(LinearSolverKind::Sparse));
+    for (a, b) in banded.iter().zip(&sparse) {
+        assert!((a - b).norm() < 1e-12, "{a} vs {b}");
+    }
 }
 
 #[test]

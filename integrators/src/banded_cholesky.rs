@@ -1,0 +1,117 @@
+//! Cholesky factorisation \\(A = U^T U\\) of a symmetric positive definite 3×3-block
+//! banded matrix ([`BlockBanded`]) in its own storage layout: `U` is upper block-banded
+//! with the same bandwidth (no fill-in), computed block by block with fixed-size 3×3
+//! arithmetic,
+//!
+//! \\[ U_{ii}^T U_{ii} = A_{ii} - \sum_{k<i} U_{ki}^T U_{ki}, \qquad
+//! U_{ij} = U_{ii}^{-T}\Big(A_{ij} - \sum_{k<i} U_{ki}^T U_{kj}\Big)\ (i < j \le i + b), \\]
+//!
+//! then solved by \\(U^T y = r\\), \\(U x = y\\). No symbolic phase and no indirection:
+//! O(n b²) flops, all on contiguous blocks. An alternative to the general sparse
+//! Cholesky for the banded Newton matrices of a single rod.
+
+use crate::IntegratorError;
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::{BlockBanded, Real};
+
+/// The factor `U` of a block-banded SPD matrix.
+#[derive(Debug, Clone, Default)]
+pub struct BandedCholesky {
+    n: usize,
+    bw: usize,
+    /// `U_{i,i+k}` at `i·(bw+1) + k`; the diagonal blocks hold `U_ii` (upper triangular).
+    u: Vec<Matrix3<Real>>,
+    factored: bool,
+}
+
+fn not_definite() -> IntegratorError {
+    IntegratorError::NotPositiveDefinite {
+        context: "banded Cholesky",
+    }
+}
+
+impl BandedCholesky {
+    /// An empty factor.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Factorises `a` (reusing the storage when the size allows).
+    pub fn factor(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+        let (n, bw) = (a.dim(), a.bandwidth());
+        let w = bw + 1;
+        self.n = n;
+        self.bw = bw;
+        self.factored = false;
+        self.u.clear();
+        self.u.resize(n * w, Matrix3::zeros());
+        for i in 0..n {
+            // Diagonal block.
+            let mut s = *a.upper(i, 0);
+            for k in i.saturating_sub(bw)..i {
+                let uki = self.u[k * w + (i - k)];
+                s -= uki.tr_mul(&uki);
+            }
+            let l = s.cholesky().ok_or_else(not_definite)?.l();
+            if !l.iter().all(|x| x.is_finite()) {
+                return Err(not_definite());
+            }
+            self.u[i * w] = l.transpose();
+            // Off-diagonal blocks of row i.
+            for j in i + 1..(i + w).min(n) {
+                let mut m = *a.upper(i, j - i);
+                for k in j.saturating_sub(bw)..i {
+                    m -= self.u[k * w + (i - k)].tr_mul(&self.u[k * w + (j - k)]);
+                }
+                // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
+                self.u[i * w + (j - i)] = l.solve_lower_triangular(&m).ok_or_else(not_definite)?;
+            }
+        }
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Solves `A x = b` in place for `k = rhs.len() / (3n)` right-hand sides stored
+    /// column after column (3 coordinates per control point).
+    pub fn solve_in_place(&self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
+        let dofs = 3 * self.n;
+        if !self.factored || dofs == 0 || rhs.len() % dofs != 0 {
+            return Err(IntegratorError::SolverState(
+                "solve before a successful factor",
+            ));
+        }
+        for column in rhs.chunks_exact_mut(dofs) {
+            self.solve_one(column);
+        }
+        Ok(())
+    }
+
+    fn solve_one(&self, x: &mut [Real]) {
+        let (n, bw, w) = (self.n, self.bw, self.bw + 1);
+        let get = |x: &[Real], i: usize| Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+        let set = |x: &mut [Real], i: usize, v: Vector3<Real>| {
+            x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
+        };
+        // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
+        for i in 0..n {
+            let mut r = get(x, i);
+            for k in i.saturating_sub(bw)..i {
+                r -= self.u[k * w + (i - k)].tr_mul(&get(x, k));
+            }
+            let y = self.u[i * w]
+                .transpose()
+                .solve_lower_triangular(&r)
+                .unwrap_or(r);
+            set(x, i, y);
+        }
+        // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
+        for i in (0..n).rev() {
+            let mut r = get(x, i);
+            for j in i + 1..(i + w).min(n) {
+                r -= self.u[i * w + (j - i)] * get(x, j);
+            }
+            let v = self.u[i * w].solve_upper_triangular(&r).unwrap_or(r);
+            set(x, i, v);
+        }
+    }
+}
