@@ -238,6 +238,7 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     }
     tally.wall = start.elapsed().as_secs_f64();
     (tally.time, tally.steps) = (sim.time, sim.steps);
+    tally.pin_forces = sim.integrator.pin_forces();
     let result = finish(scene, &sim.system, tally)?;
     notify_finish(
         observers,

@@ -59,3 +59,44 @@ fn damped_dynamics_settles_on_the_static_equilibrium() {
     assert!(dynamic.energy["kinetic"] < 1e-12, "not at rest");
     assert!(gap <= 1e-5, "dynamic equilibrium differs by {gap:.3e} m");
 }
+
+#[test]
+fn settled_dynamics_report_the_static_pin_forces() {
+    let statics =
+        run(&catenary_scene(16, 0.0, r#"method = "static""#).expect("scene")).expect("static");
+    let weight = 0.1 * 1.0 * 9.81;
+    let total_y: Real = statics.pin_forces.iter().map(|f| f[1]).sum();
+    assert!(
+        (total_y - weight).abs() < 1e-9,
+        "pins carry {total_y} N of {weight} N"
+    );
+    // The midpoint rule needs Newton to converge on the stiff compressed start (1 ms
+    // steps) and damps the stiff axial modes only through α, so it takes longer to rest.
+    let runs = [
+        ("implicit-euler", 0.01, 8.0),
+        ("implicit-midpoint", 0.001, 16.0),
+        ("bdf2", 0.01, 8.0),
+    ];
+    for (method, dt, duration) in runs {
+        let solver = format!("method = \"{method}\"\ndt = {dt}\nduration = {duration}");
+        let dynamic = run(&catenary_scene(16, 4.0, &solver).expect("scene")).expect("dynamic");
+        assert_eq!(dynamic.pin_forces.len(), 2, "{method}");
+        let pairs = statics
+            .samples
+            .positions
+            .iter()
+            .zip(&dynamic.samples.positions);
+        let moved = pairs.map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, Real::max));
+        println!(
+            "{method}: t = {} s, shape {:.1e} m from static, kinetic {:.1e} J",
+            dynamic.time,
+            moved.fold(0.0, Real::max),
+            dynamic.energy["kinetic"]
+        );
+        for (a, b) in statics.pin_forces.iter().zip(&dynamic.pin_forces) {
+            let gap = (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, Real::max);
+            println!("{method}: pin force {b:?} N, {gap:.1e} N from static");
+            assert!(gap < 1e-6, "{method}: {a:?} vs {b:?}");
+        }
+    }
+}

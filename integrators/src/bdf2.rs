@@ -127,4 +127,8 @@ impl Integrator for Bdf2 {
         }
         result
     }
+
+    fn pin_forces(&self) -> Vec<Vector3<Real>> {
+        self.stepper.pin_forces()
+    }
 }

@@ -32,7 +32,7 @@ pub enum IntegratorError {
         what: &'static str,
     },
     /// Newton did not reach the tolerance.
-    #[error("Newton did not converge in {iterations} iterations (residual {residual:e})")]
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:e}); state rolled back (try a smaller dt or more newton_iterations)")]
     NotConverged {
         /// Iterations done.
         iterations: usize,

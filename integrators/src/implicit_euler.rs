@@ -34,15 +34,6 @@ impl ImplicitEuler {
             ..Self::default()
         })
     }
-
-    /// Pin forces of the last step, N (one per pin, acting on the rod).
-    pub fn pin_forces(&self, dt: Real) -> impl Iterator<Item = Vector3<Real>> + '_ {
-        self.stepper
-            .workspace
-            .multipliers()
-            .iter()
-            .map(move |m| m / dt)
-    }
 }
 
 impl Integrator for ImplicitEuler {
@@ -58,5 +49,9 @@ impl Integrator for ImplicitEuler {
         };
         let result = self.stepper.solve(system, &self.params, step);
         self.stepper.finish(system, result)
+    }
+
+    fn pin_forces(&self) -> Vec<Vector3<Real>> {
+        self.stepper.pin_forces()
     }
 }

@@ -119,6 +119,8 @@ pub(crate) struct Stepper {
     pub x: Vec<Vector3<Real>>,
     scratch: Vec<Vector3<Real>>,
     alpha: Real,
+    /// β of the last solve (pin forces are multipliers / β).
+    beta: Real,
 }
 
 impl Stepper {
@@ -164,6 +166,7 @@ impl Stepper {
         params: &NewtonParams,
         step: Increment,
     ) -> Result<StepStats, IntegratorError> {
+        self.beta = step.beta;
         let mut problem = IncrementalProblem {
             base_q: &self.base_q,
             base_v: &self.base_v,
@@ -179,6 +182,16 @@ impl Stepper {
             params,
             &mut self.workspace,
         )
+    }
+
+    /// Forces the pins exerted on the rod during the last step, N: the KKT multipliers
+    /// divided by β, since the momentum balance reads \(M(x - \hat v) = \beta(f + G^T\lambda)\).
+    pub fn pin_forces(&self) -> Vec<Vector3<Real>> {
+        let beta = self.beta;
+        let forces = self.workspace.multipliers().iter();
+        forces
+            .map(|m| if beta > 0.0 { m / beta } else { *m })
+            .collect()
     }
 
     /// Checks the end state; on any error (from `result` or non-finite values) restores

@@ -94,4 +94,9 @@ pub trait Integrator: Send + Sync {
     fn name(&self) -> &str;
     /// Advances `system` by `dt` seconds; pins must already hold their end-of-step targets.
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError>;
+    /// Forces the pins exerted on the rod during the last step, N, one per pin (empty if
+    /// the integrator does not compute them).
+    fn pin_forces(&self) -> Vec<Vector3<Real>> {
+        Vec::new()
+    }
 }
