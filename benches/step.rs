@@ -15,24 +15,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use splinerod::prelude::*;
 
 fn cable(n: usize, span: Real) -> RodSystem {
-    let material = Material {
-        rest_length: 1.0,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, n, 1.0).unwrap();
-    let rod = Rod::straight(
-        material,
-        Box::new(basis),
-        Vector3::zeros(),
-        Vector3::new(span, 0.0, 0.0),
-    )
-    .unwrap();
-    let pins = [Pin::here(&rod, 0.0).unwrap(), Pin::here(&rod, 1.0).unwrap()];
-    RodSystem::new(rod)
-        .with_energy(Stretching::new(100.0).unwrap())
-        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0)).unwrap())
-        .with_pin(pins[0])
-        .with_pin(pins[1])
+    splinerod::problems::pinned_cable(n, span, 100.0).unwrap()
 }
 
 fn one_newton_iteration() -> ImplicitEuler {
