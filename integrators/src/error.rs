@@ -31,6 +31,14 @@ pub enum IntegratorError {
         /// Which quantity.
         what: &'static str,
     },
+    /// A Newton step was absurdly large: the iteration is diverging.
+    #[error("a Newton step moved a point by {step:e} m (limit {limit:e} m): the solve is diverging; state rolled back (try a smaller dt)")]
+    Diverged {
+        /// Largest point displacement of the step, m.
+        step: Real,
+        /// The limit, m.
+        limit: Real,
+    },
     /// Newton did not reach the tolerance.
     #[error("Newton did not converge in {iterations} iterations (residual {residual:e}); state rolled back (try a smaller dt or more newton_iterations)")]
     NotConverged {

@@ -16,6 +16,11 @@ use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
 
+/// A Newton step moving a material point by more than this many rest lengths is taken
+/// as divergence (a safety net against numerical explosion, e.g. a linearised step on a
+/// rod too stiff for its time step), not as motion.
+pub const DIVERGENCE_LENGTHS: Real = 1e3;
+
 /// Settings of Newton's method.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NewtonParams {
@@ -146,6 +151,10 @@ pub fn solve(
         newton_direction(problem, system, x, ws, &mut stats)?;
         // A step already below the tolerance is taken whole: its merit change is rounding.
         let full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
+        let limit = DIVERGENCE_LENGTHS * system.rod().material().rest_length;
+        if full > limit {
+            return Err(IntegratorError::Diverged { step: full, limit });
+        }
         let search = params.line_search && full > tolerance;
         let t = line_search(problem, system, x, ws, search, &mut stats)?;
         problem.on_step(t);

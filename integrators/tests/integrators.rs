@@ -240,3 +240,17 @@ fn end_pins_are_eliminated_consistently_with_interior_pins() {
     let worst = balance.iter().map(|v| v.amax()).fold(0.0, Real::max);
     assert!(worst < 1e-10 * weight, "force imbalance {worst:e}");
 }
+
+#[test]
+fn an_absurd_newton_step_is_rejected_as_divergence() {
+    // A step that would move points by ~1e9 rest lengths is not motion but divergence.
+    let mut sys = Quadratic::new(7, 0.0, Vector3::new(0.0, -1e10, 0.0)).unwrap();
+    let q0 = sys.rod.positions.clone();
+    let mut euler = ImplicitEuler::new(NewtonParams::default()).unwrap();
+    let err = euler.step(&mut sys, 1.0).unwrap_err();
+    assert!(matches!(err, IntegratorError::Diverged { .. }), "{err}");
+    assert_eq!(sys.rod.positions, q0, "state rolled back");
+    // Ordinary free flight is far below the limit.
+    let mut sys = Quadratic::new(7, 0.0, Vector3::new(0.0, -9.81, 0.0)).unwrap();
+    assert!(euler.step(&mut sys, 1.0).is_ok());
+}
