@@ -17,9 +17,13 @@
 //! definite (far from the minimum, or parallel tangents, where the minimiser is not
 //! unique) the step uses the Gauss–Newton matrix \\(J^T J\\), \\(J = [C'(s), -C'(t)]\\),
 //! with a Levenberg shift of `1e-10` of its trace. It stops when both parameters move by
-//! less than `1e-12` of their span lengths, when no step decreases `f`, or after 50
-//! steps; convergence is quadratic near a non-degenerate minimum. The minimum found is the global one when `f` has one local minimum on the box,
-//! which holds for spans that are short compared with their radii of curvature.
+//! less than `1e-12` of their span lengths, when the model's predicted decrease
+//! \\(-\tfrac12 g \cdot \Delta\\) falls below `1e-14 f` (the distance is then converged to
+//! about `1e-14` relative: in the flat valley of parallel spans the parameters never
+//! settle to `1e-12`, but the distance does), when no step decreases `f`, or after 50
+//! steps. Convergence is quadratic near a non-degenerate minimum: the tests take 1 step
+//! (corners) to 6. The minimum found is the global one when `f` has one local minimum
+//! on the box, which holds for spans that are short compared with their radii of curvature.
 //!
 //! The curve is discontinuous at a cut and its derivatives at other knots, so a span is
 //! evaluated on `[start, end⁻]`, `end⁻` being the largest float below `end`: the basis
@@ -50,29 +54,37 @@ const MAX_STEPS: usize = 50;
 const GRID: usize = 4;
 /// Relative step size (of the span lengths) at which the iteration stops.
 const STEP_TOLERANCE: Real = 1e-12;
+/// Predicted relative decrease of `f` at which the iteration stops: the distance is then
+/// within about `1e-14` (relative) of the minimum, near the round-off floor.
+const DECREASE_TOLERANCE: Real = 1e-14;
+/// Most step halvings of the line search.
+const MAX_HALVINGS: usize = 30;
 
 /// Closest points \\(C(s), C(t)\\) between the curve pieces of `span_a` and `span_b`
 /// (spans of `rod`'s basis, as listed by [`spans`](crate::basis::spans) or
 /// [`SpanBoxes::spans`](super::SpanBoxes::spans)), by projected Newton from a grid
 /// start (module docs). Errors if a span is not a non-empty knot span of the rod.
 pub fn closest_points(rod: &Rod, span_a: &Span, span_b: &Span) -> Result<Closest, CoreError> {
+    Ok(closest_points_counted(rod, span_a, span_b)?.0)
+}
+
+/// [`closest_points`] and the number of Newton steps it took.
+pub(crate) fn closest_points_counted(
+    rod: &Rod,
+    span_a: &Span,
+    span_b: &Span,
+) -> Result<(Closest, usize), CoreError> {
     let a = SpanCurve::new(rod, span_a)?;
     let b = SpanCurve::new(rod, span_b)?;
     let mut x = grid_start(&a, &b)?;
-    for _ in 0..MAX_STEPS {
-        match newton_step(&a, &b, &x)? {
-            Some(next) => {
-                let small = (next.s - x.s).abs() <= STEP_TOLERANCE * a.length()
-                    && (next.t - x.t).abs() <= STEP_TOLERANCE * b.length();
-                x = next;
-                if small {
-                    break;
-                }
-            }
-            None => break,
+    for step in 1..=MAX_STEPS {
+        let (next, converged) = newton_step(&a, &b, &x)?;
+        x = next;
+        if converged {
+            return Ok((x.closest(), step));
         }
     }
-    Ok(x.closest())
+    Ok((x.closest(), MAX_STEPS))
 }
 
 /// One span of a rod, evaluated on `[lo, hi]` with `hi = end⁻`.
@@ -216,9 +228,11 @@ fn grid_start<'a>(a: &SpanCurve<'a>, b: &SpanCurve<'a>) -> Result<Iterate, CoreE
     Iterate::at(a, b, at(a, best.0), at(b, best.1))
 }
 
-/// One projected Newton step with backtracking; `None` when no step decreases `f` (a
-/// stationary point, a corner, or round-off level).
-fn newton_step(a: &SpanCurve, b: &SpanCurve, x: &Iterate) -> Result<Option<Iterate>, CoreError> {
+/// One projected Newton step with backtracking: the new iterate and whether the
+/// iteration has converged (both parameters held at a corner, a step below
+/// [`STEP_TOLERANCE`], a predicted decrease below [`DECREASE_TOLERANCE`], or no
+/// decrease at all).
+fn newton_step(a: &SpanCurve, b: &SpanCurve, x: &Iterate) -> Result<(Iterate, bool), CoreError> {
     let r = x.r();
     let (ta, tb) = (x.a.d1, x.b.d1);
     let g = [r.dot(&ta), -r.dot(&tb)];
@@ -231,19 +245,26 @@ fn newton_step(a: &SpanCurve, b: &SpanCurve, x: &Iterate) -> Result<Option<Itera
     // Held: at a bound with the gradient pointing outwards (descent leaves the box).
     let held = [held(a.side(x.s), g[0]), held(b.side(x.t), g[1])];
     if held[0] && held[1] {
-        return Ok(None);
+        return Ok((*x, true));
     }
     let step = direction(h, gn, g, held);
     let f0 = x.f();
+    // Decrease of the quadratic model, -g·Δ/2 = f - f* for an exact model.
+    let negligible = -0.5 * (g[0] * step[0] + g[1] * step[1]) <= DECREASE_TOLERANCE * f0;
     let mut scale = 1.0;
-    for _ in 0..40 {
+    for _ in 0..MAX_HALVINGS {
         let next = Iterate::at(a, b, x.s + scale * step[0], x.t + scale * step[1])?;
-        if next.f() <= f0 && (next.s != x.s || next.t != x.t) {
-            return Ok(Some(next));
+        if next.f() <= f0 {
+            let small = (next.s - x.s).abs() <= STEP_TOLERANCE * a.length()
+                && (next.t - x.t).abs() <= STEP_TOLERANCE * b.length();
+            return Ok((next, small || negligible));
+        }
+        if negligible {
+            break;
         }
         scale *= 0.5;
     }
-    Ok(None)
+    Ok((*x, true))
 }
 
 /// Whether a parameter at `side` of its box with gradient `g` stays on its bound.
