@@ -40,6 +40,7 @@ mod error;
 pub mod knot_map;
 pub mod local_update;
 pub mod pins;
+pub mod proximity;
 pub mod quadrature;
 pub mod rod;
 
@@ -52,6 +53,7 @@ pub use bspline::BSplineSpace;
 pub use error::CoreError;
 pub use knot_map::{Coefficient, KnotMap, KnotOperation};
 pub use pins::Pin;
+pub use proximity::{closest_points, Closest, SpanBoxes};
 pub use quadrature::{GaussLegendre, QuadPoint, QuadratureTable};
 pub use rod::{Material, Rod};
 

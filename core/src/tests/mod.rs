@@ -2,6 +2,7 @@
 mod basis;
 mod knots;
 mod local_update;
+mod proximity;
 mod rod;
 
 use crate::{BSplineSpace, BasisSpace, Real};
