@@ -9,22 +9,7 @@ use splinerod::Grab;
 /// The paper's 12-control-point rod hanging from both ends, after 0.1 s of falling,
 /// cut at mid-length.
 fn cut_rod(params: NewtonParams) -> Simulation {
-    let material = Material {
-        rest_length: 1.0,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, 12, 1.0).expect("basis");
-    let end = Vector3::new(0.8, 0.0, 0.0);
-    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
-    let pins = [
-        Pin::here(&rod, 0.0).expect("pin"),
-        Pin::here(&rod, 1.0).expect("pin"),
-    ];
-    let system = RodSystem::new(rod)
-        .with_energy(Stretching::new(100.0).expect("stiffness"))
-        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0)).expect("gravity"))
-        .with_pin(pins[0])
-        .with_pin(pins[1]);
+    let system = splinerod::problems::pinned_cable(12, 0.8, 100.0).expect("cable");
     let mut sim = Simulation::new(
         system,
         Box::new(ImplicitEuler::new(params).expect("params")),

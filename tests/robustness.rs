@@ -23,25 +23,11 @@ impl Energy for BreaksBelow {
 }
 
 fn hanging_cable(poison_depth: Real) -> Simulation {
-    let material = Material {
-        rest_length: 1.0,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, 12, 1.0).expect("basis");
-    let end = Vector3::new(0.8, 0.0, 0.0);
-    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
-    let pins = [
-        Pin::here(&rod, 0.0).expect("pin"),
-        Pin::here(&rod, 1.0).expect("pin"),
-    ];
-    let system = RodSystem::new(rod)
-        .with_energy(Stretching::new(100.0).expect("stiffness"))
-        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0)).expect("gravity"))
+    let system = splinerod::problems::pinned_cable(12, 0.8, 100.0)
+        .expect("cable")
         .with_energy(BreaksBelow {
             depth: poison_depth,
-        })
-        .with_pin(pins[0])
-        .with_pin(pins[1]);
+        });
     let euler = ImplicitEuler::new(NewtonParams::default()).expect("params");
     Simulation::new(system, Box::new(euler))
 }

@@ -86,6 +86,8 @@ pub struct Adapter {
     /// Recently inserted knot values and the adapt steps they stay protected.
     protected: Vec<(Real, usize)>,
     marks: Vec<Refinement>,
+    /// Knot indices proposed for removal (reused buffer).
+    removals: Vec<usize>,
 }
 
 impl std::fmt::Debug for Adapter {
@@ -108,6 +110,7 @@ impl Adapter {
             criteria: Vec::new(),
             protected: Vec::new(),
             marks: Vec::new(),
+            removals: Vec::new(),
         })
     }
 
@@ -194,14 +197,12 @@ impl Adapter {
         on_change: &mut dyn FnMut(&Rod, &KnotMap),
     ) -> Result<usize, AdaptError> {
         self.collect(rod, interactions);
-        let mut knots: Vec<usize> = self
-            .marks
-            .iter()
-            .filter_map(|m| match m {
-                Refinement::Remove { knot } => Some(*knot),
-                Refinement::Insert { .. } => None,
-            })
-            .collect();
+        let mut knots = std::mem::take(&mut self.removals);
+        knots.clear();
+        knots.extend(self.marks.iter().filter_map(|m| match m {
+            Refinement::Remove { knot } => Some(*knot),
+            Refinement::Insert { .. } => None,
+        }));
         // Highest index first, so the indices still to visit stay valid.
         knots.sort_unstable_by(|a, b| b.cmp(a));
         knots.dedup();
@@ -209,7 +210,7 @@ impl Adapter {
         // curve by at most `shape_tolerance`.
         let mut budget = self.params.shape_tolerance;
         let mut count = 0;
-        for k in knots {
+        for &k in &knots {
             if rod.len() <= self.params.min_control_points {
                 break;
             }
@@ -225,6 +226,8 @@ impl Adapter {
             budget -= error;
             count += 1;
         }
+        // Keep the buffer for the next step (an error above merely drops it).
+        self.removals = knots;
         Ok(count)
     }
 
