@@ -33,6 +33,7 @@
 #![warn(missing_docs)]
 
 pub mod banded;
+pub mod block_banded;
 pub mod basis;
 pub mod bspline;
 mod cutting;
@@ -47,7 +48,8 @@ pub mod rod;
 /// The scalar type of every physical quantity.
 pub type Real = f64;
 
-pub use banded::{BlockBanded, SymBanded};
+pub use banded::SymBanded;
+pub use block_banded::{BlockBanded, FarBlock};
 pub use basis::{BasisSpace, BasisValues, Span, MAX_DEGREE};
 pub use bspline::BSplineSpace;
 pub use error::CoreError;

@@ -8,7 +8,9 @@
 //!
 //! then solved by \\(U^T y = r\\), \\(U x = y\\). No symbolic phase and no indirection:
 //! O(n b²) flops, all on contiguous blocks. An alternative to the general sparse
-//! Cholesky for the banded Newton matrices of a single rod.
+//! Cholesky for the banded Newton matrices of a single rod; a matrix with far blocks
+//! (self-contact) is refused with an error, since they would fill in the band's gaps:
+//! [`crate::linear::LinearSolver`] sends those to the sparse path.
 
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
@@ -36,13 +38,19 @@ impl BandedCholesky {
         Self::default()
     }
 
-    /// Factorises `a` (reusing the storage when the size allows).
+    /// Factorises `a` (reusing the storage when the size allows). Errors with
+    /// [`IntegratorError::SolverState`] if `a` has far blocks, which a band cannot hold.
     pub fn factor(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+        self.factored = false;
+        if a.has_far_blocks() {
+            return Err(IntegratorError::SolverState(
+                "the banded Cholesky cannot factorise far blocks (use the sparse path)",
+            ));
+        }
         let (n, bw) = (a.dim(), a.bandwidth());
         let w = bw + 1;
         self.n = n;
         self.bw = bw;
-        self.factored = false;
         self.u.clear();
         self.u.resize(n * w, Matrix3::zeros());
         for i in 0..n {

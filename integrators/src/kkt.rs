@@ -76,8 +76,9 @@ impl Constraints {
         }
     }
 
-    /// Adds the augmented Lagrangian term `ρ GᵀG` to `a` (within the band: a pin's row
-    /// spans `d + 1` consecutive control points).
+    /// Adds the augmented Lagrangian term `ρ GᵀG` to `a` (within the band when it is at
+    /// least `d` wide, since a pin's row spans `d + 1` consecutive control points; as far
+    /// blocks otherwise).
     pub fn add_gram(&self, rho: Real, a: &mut BlockBanded) {
         if rho == 0.0 {
             return;
@@ -86,7 +87,7 @@ impl Constraints {
             for i in 0..b.order {
                 for j in i..b.order {
                     let w = rho * b.value[i] * b.value[j];
-                    a.add_block(b.first + i, b.first + j, &Matrix3::from_diagonal_element(w));
+                    a.add_coupling(b.first + i, b.first + j, &Matrix3::from_diagonal_element(w));
                 }
             }
         }

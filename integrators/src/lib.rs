@@ -27,6 +27,7 @@
 
 mod banded_cholesky;
 mod bdf2;
+mod block_pattern;
 pub mod conformance;
 mod error;
 mod implicit_euler;
@@ -75,7 +76,7 @@ pub trait System: Send + Sync {
 pub struct StepStats {
     /// Newton iterations (= numeric factorisations of the Newton matrix).
     pub newton_iterations: usize,
-    /// Symbolic analyses (only after the basis changed).
+    /// Symbolic analyses (only after the basis or the far block pattern changed).
     pub symbolic_analyses: usize,
     /// Line-search step reductions.
     pub line_search_cuts: usize,

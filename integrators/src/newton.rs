@@ -4,8 +4,9 @@
 //! A [`NewtonProblem`] is the minimisation of a merit \\(\Phi(x)\\) whose gradient is the
 //! residual `r(x)` and whose (positive definite) Newton matrix is `A(x)`, subject to the
 //! pins \\(G x = c\\). Each iteration assembles `r` and `A`, factorises `A` (numeric
-//! only, unless the basis changed), solves the KKT system by a Schur complement
-//! ([`crate::kkt`]), and takes the step, halving it while the Armijo condition
+//! only, unless the basis or the far block pattern changed; far blocks select the sparse
+//! path, see [`crate::linear`]), solves the KKT system by a Schur complement
+//! (the private `kkt` module), and takes the step, halving it while the Armijo condition
 //! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails.
 //! It stops when the step moves no material point by more than
 //! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).

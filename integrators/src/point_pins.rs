@@ -6,13 +6,16 @@
 //! \\[ A_{jk} \to 0,\ A_{kj} \to 0\ (j \ne k), \quad A_{kk} \to I, \quad
 //! b_j \to b_j - A_{jk}\delta_k, \quad b_k \to \delta_k, \\]
 //!
-//! which keeps `A` symmetric positive definite and banded. The pin's multiplier follows
-//! from the original row `k`: \\(\mu = (A \Delta x)_k - b_k - (G^T\mu)_k\\) with the
-//! other pins' multipliers.
+//! which keeps `A` symmetric positive definite and within its band. Far blocks
+//! (self-contact couplings `A_jk` with `|j − k|` beyond the band) are treated alike: saved,
+//! zeroed in place (so the sparsity pattern, and with it the symbolic analysis, is
+//! unchanged) and moved to the right-hand side as \\(-A_{jk}\delta_k\\). The pin's
+//! multiplier follows from the original row `k`: \\(\mu = (A \Delta x)_k - b_k -
+//! (G^T\mu)_k\\) with the other pins' multipliers.
 
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BasisValues, BlockBanded, Real};
+use splinerod_core::{BasisValues, BlockBanded, FarBlock, Real};
 
 /// Pins eliminated from the Newton system, with what is needed to recover their forces.
 #[derive(Debug, Default)]
@@ -21,6 +24,9 @@ pub(crate) struct PointPins {
     pins: Vec<(usize, usize)>,
     /// Per eliminated pin: blocks \\(A_{jk}\\) for `j = k - bw ..= k + bw` before elimination.
     saved: Vec<Matrix3<Real>>,
+    /// Far blocks touching an eliminated control point, before elimination:
+    /// `(e, j, A_jk)` for eliminated pin `e` at control point `k` (duplicates kept: they sum).
+    saved_far: Vec<(usize, usize, Matrix3<Real>)>,
     /// Per eliminated pin: the right-hand side `b_k` before elimination.
     rhs: Vec<Vector3<Real>>,
     bandwidth: usize,
@@ -60,7 +66,8 @@ impl PointPins {
         self.pins.iter().any(|&(_, q)| q == k)
     }
 
-    /// Saves the eliminated columns of `a`, then decouples them (identity on the diagonal).
+    /// Saves the eliminated columns of `a` (band and far blocks), then decouples them
+    /// (identity on the diagonal, zero far blocks).
     pub fn eliminate_matrix(&mut self, a: &mut BlockBanded) {
         let (n, bw) = (a.dim(), a.bandwidth());
         self.bandwidth = bw;
@@ -72,6 +79,12 @@ impl PointPins {
                 self.saved[e * width + j + bw - k] = a.block(j, k);
             }
         }
+        self.save_far(a.far_blocks());
+        for f in a.far_blocks_mut() {
+            if self.holds(f.row) || self.holds(f.col) {
+                f.block = Matrix3::zeros();
+            }
+        }
         for &(_, k) in &self.pins {
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 let value = if j == k {
@@ -80,6 +93,20 @@ impl PointPins {
                     Matrix3::zeros()
                 };
                 a.set_block(j, k, &value);
+            }
+        }
+    }
+
+    /// Saves, per eliminated pin at `k`, the far blocks `A_jk` of column `k`.
+    fn save_far(&mut self, far: &[FarBlock]) {
+        self.saved_far.clear();
+        for (e, &(_, k)) in self.pins.iter().enumerate() {
+            for f in far {
+                if f.col == k {
+                    self.saved_far.push((e, f.row, f.block));
+                } else if f.row == k {
+                    self.saved_far.push((e, f.col, f.block.transpose()));
+                }
             }
         }
     }
@@ -101,10 +128,12 @@ impl PointPins {
             let delta = targets[p] - x[k];
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 let change = self.saved[e * width + j + bw - k] * delta;
-                for c in 0..3 {
-                    b[3 * j + c] -= change[c];
-                }
+                sub3(b, j, &change);
             }
+        }
+        for &(e, j, block) in &self.saved_far {
+            let (p, k) = self.pins[e];
+            sub3(b, j, &(block * (targets[p] - x[k])));
         }
         for &(p, k) in &self.pins {
             let delta = targets[p] - x[k];
@@ -128,6 +157,9 @@ impl PointPins {
                 // A_kj = A_jkᵀ.
                 row += self.saved[e * width + j + bw - k].tr_mul(&flat3(dx, j));
             }
+            for &(_, j, block) in self.saved_far.iter().filter(|s| s.0 == e) {
+                row += block.tr_mul(&flat3(dx, j));
+            }
             mu[p] = row;
         }
     }
@@ -135,4 +167,12 @@ impl PointPins {
 
 fn flat3(v: &[Real], k: usize) -> Vector3<Real> {
     Vector3::new(v[3 * k], v[3 * k + 1], v[3 * k + 2])
+}
+
+/// `v[3k..3k + 3] −= d`.
+fn sub3(v: &mut [Real], k: usize, d: &Vector3<Real>) {
+    v[3 * k..3 * k + 3]
+        .iter_mut()
+        .zip(d.iter())
+        .for_each(|(x, d)| *x -= d);
 }

@@ -1,0 +1,244 @@
+//! [`BlockBanded`]: the 3×3-block Newton matrices \\(A = c_M M \otimes I_3 + c_K K\\) of a
+//! rod, a block band plus a short list of *far* blocks.
+//!
+//! Energies that integrate along the curve couple control points at most `d` apart, so
+//! their Hessians live in the band; the upper blocks `(i, i + k)`, `0 ≤ k ≤ bandwidth`,
+//! are stored at `i · (bandwidth + 1) + k`. Interactions between distant parts of the
+//! rod (self-contact) couple control points far apart: those blocks are appended to a
+//! list by [`BlockBanded::add_coupling`], each as an upper block `(row < col)`; entries
+//! with the same position are summed. A matrix with far blocks is no longer banded, and
+//! the solvers switch to a general sparse factorisation for it.
+//! Assembly is O(n + far blocks) and allocation-free once sized.
+
+use crate::banded::SymBanded;
+use crate::Real;
+use nalgebra::{Matrix3, Vector3};
+
+/// An upper block `(row, col)`, `col > row + bandwidth`, outside the band of a
+/// [`BlockBanded`] matrix; the matrix also holds its transpose at `(col, row)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FarBlock {
+    /// Block row (control point), smaller than `col`.
+    pub row: usize,
+    /// Block column (control point).
+    pub col: usize,
+    /// The 3×3 block \\(A_{row,col}\\).
+    pub block: Matrix3<Real>,
+}
+
+/// A symmetric matrix of 3×3 blocks with `bandwidth` block off-diagonals on each side,
+/// plus any number of [`FarBlock`]s outside the band.
+///
+/// [`add_block`](BlockBanded::add_block)`(i, j, B)` means \\(A_{ij} \mathrel{+}= B\\) and,
+/// for `i ≠ j`, \\(A_{ji} \mathrel{+}= B^T\\): assemble each unordered pair once.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BlockBanded {
+    n: usize,
+    bandwidth: usize,
+    blocks: Vec<Matrix3<Real>>,
+    far: Vec<FarBlock>,
+}
+
+impl BlockBanded {
+    /// The zero matrix of `n × n` blocks.
+    pub fn zeros(n: usize, bandwidth: usize) -> Self {
+        Self {
+            n,
+            bandwidth,
+            blocks: vec![Matrix3::zeros(); n * (bandwidth + 1)],
+            far: Vec::new(),
+        }
+    }
+
+    /// Resizes (reusing the allocation when possible), sets every block to zero and
+    /// drops the far blocks.
+    pub fn reset(&mut self, n: usize, bandwidth: usize) {
+        self.n = n;
+        self.bandwidth = bandwidth;
+        self.blocks.clear();
+        self.blocks.resize(n * (bandwidth + 1), Matrix3::zeros());
+        self.far.clear();
+    }
+
+    /// Number of block rows.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Number of stored block off-diagonals.
+    pub fn bandwidth(&self) -> usize {
+        self.bandwidth
+    }
+
+    /// Block `(i, j)` of the full symmetric matrix (band and far blocks).
+    pub fn block(&self, i: usize, j: usize) -> Matrix3<Real> {
+        let (lo, hi) = (i.min(j), i.max(j));
+        let upper = if hi >= self.n {
+            Matrix3::zeros()
+        } else if hi - lo <= self.bandwidth {
+            self.blocks[lo * (self.bandwidth + 1) + hi - lo]
+        } else {
+            self.far
+                .iter()
+                .filter(|f| f.row == lo && f.col == hi)
+                .map(|f| f.block)
+                .sum()
+        };
+        if i <= j {
+            upper
+        } else {
+            upper.transpose()
+        }
+    }
+
+    /// The stored upper band block `(i, i + k)`.
+    #[inline]
+    pub fn upper(&self, i: usize, k: usize) -> &Matrix3<Real> {
+        &self.blocks[i * (self.bandwidth + 1) + k]
+    }
+
+    /// The far blocks, in the order they were added (positions may repeat: they sum).
+    pub fn far_blocks(&self) -> &[FarBlock] {
+        &self.far
+    }
+
+    /// The far blocks, mutably (e.g. to zero the couplings of an eliminated unknown).
+    pub fn far_blocks_mut(&mut self) -> &mut [FarBlock] {
+        &mut self.far
+    }
+
+    /// Whether the matrix has blocks outside the band.
+    pub fn has_far_blocks(&self) -> bool {
+        !self.far.is_empty()
+    }
+
+    /// Sets band block `(i, j)` to `b` (and `(j, i)` to `bᵀ`); `b` must be symmetric if
+    /// `i == j`.
+    #[track_caller]
+    pub fn set_block(&mut self, i: usize, j: usize, b: &Matrix3<Real>) {
+        let w = self.bandwidth + 1;
+        let (lo, hi, stored) = if i <= j {
+            (i, j, *b)
+        } else {
+            (j, i, b.transpose())
+        };
+        assert!(
+            hi - lo < w && hi < self.n,
+            "block ({i}, {j}) is outside the band"
+        );
+        self.blocks[lo * w + hi - lo] = stored;
+    }
+
+    /// Whether every stored entry is finite.
+    pub fn is_finite(&self) -> bool {
+        let finite = |b: &Matrix3<Real>| b.iter().all(|x| x.is_finite());
+        self.blocks.iter().all(finite) && self.far.iter().all(|f| finite(&f.block))
+    }
+
+    /// Adds `b` at band position `(i, j)` and `bᵀ` at `(j, i)`; for `i == j`, `b` should
+    /// be symmetric. Panics outside the band (use [`add_coupling`](Self::add_coupling)
+    /// for distant control points).
+    #[track_caller]
+    #[inline]
+    pub fn add_block(&mut self, i: usize, j: usize, b: &Matrix3<Real>) {
+        let w = self.bandwidth + 1;
+        if i <= j {
+            assert!(
+                j - i < w && j < self.n,
+                "block ({i}, {j}) is outside the band"
+            );
+            self.blocks[i * w + j - i] += b;
+        } else {
+            assert!(
+                i - j < w && i < self.n,
+                "block ({i}, {j}) is outside the band"
+            );
+            self.blocks[j * w + i - j] += b.transpose();
+        }
+    }
+
+    /// Adds `b` at `(i, j)` and `bᵀ` at `(j, i)` for any pair of control points: into the
+    /// band when `|i − j| ≤ bandwidth`, otherwise as a [`FarBlock`]. Panics if an index
+    /// is out of range.
+    #[track_caller]
+    pub fn add_coupling(&mut self, i: usize, j: usize, b: &Matrix3<Real>) {
+        assert!(i < self.n && j < self.n, "block ({i}, {j}) is out of range");
+        if i.abs_diff(j) <= self.bandwidth {
+            self.add_block(i, j, b);
+        } else if i < j {
+            self.far.push(FarBlock {
+                row: i,
+                col: j,
+                block: *b,
+            });
+        } else {
+            self.far.push(FarBlock {
+                row: j,
+                col: i,
+                block: b.transpose(),
+            });
+        }
+    }
+
+    /// Multiplies every entry by `c`.
+    pub fn scale(&mut self, c: Real) {
+        self.blocks.iter_mut().for_each(|b| *b *= c);
+        self.far.iter_mut().for_each(|f| f.block *= c);
+    }
+
+    /// Adds \\(c\, M \otimes I_3\\) for a scalar banded matrix `m` of the same size.
+    #[track_caller]
+    pub fn add_scaled_scalar(&mut self, c: Real, m: &SymBanded) {
+        assert!(
+            m.dim() == self.n && m.bandwidth() <= self.bandwidth,
+            "shape mismatch"
+        );
+        for i in 0..self.n {
+            for k in 0..=m.bandwidth().min(self.n - 1 - i) {
+                let v = c * m.get(i, i + k);
+                let b = &mut self.blocks[i * (self.bandwidth + 1) + k];
+                b[(0, 0)] += v;
+                b[(1, 1)] += v;
+                b[(2, 2)] += v;
+            }
+        }
+    }
+
+    /// `y = self · x`.
+    #[track_caller]
+    pub fn mul_vec(&self, x: &[Vector3<Real>], y: &mut [Vector3<Real>]) {
+        assert!(x.len() == self.n && y.len() == self.n, "dimension mismatch");
+        y.iter_mut().for_each(|v| *v = Vector3::zeros());
+        let w = self.bandwidth + 1;
+        for i in 0..self.n {
+            y[i] += self.blocks[i * w] * x[i];
+            for k in 1..w.min(self.n - i) {
+                let b = &self.blocks[i * w + k];
+                y[i] += b * x[i + k];
+                y[i + k] += b.tr_mul(&x[i]);
+            }
+        }
+        for f in &self.far {
+            y[f.row] += f.block * x[f.col];
+            y[f.col] += f.block.tr_mul(&x[f.row]);
+        }
+    }
+
+    /// The full matrix as a dense `3n × 3n` array (tests and small analyses only).
+    pub fn to_dense(&self) -> nalgebra::DMatrix<Real> {
+        let mut a = nalgebra::DMatrix::zeros(3 * self.n, 3 * self.n);
+        for i in 0..self.n {
+            for j in i.saturating_sub(self.bandwidth)..(i + self.bandwidth + 1).min(self.n) {
+                a.fixed_view_mut::<3, 3>(3 * i, 3 * j)
+                    .copy_from(&self.block(i, j));
+            }
+        }
+        for f in &self.far {
+            let mut upper = a.fixed_view_mut::<3, 3>(3 * f.row, 3 * f.col);
+            upper += f.block;
+            let mut lower = a.fixed_view_mut::<3, 3>(3 * f.col, 3 * f.row);
+            lower += f.block.transpose();
+        }
+        a
+    }
+}
