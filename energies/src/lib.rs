@@ -3,7 +3,8 @@
 //! Potential energies of a rod, as functions of its control points, through one small
 //! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12),
 //! [`Bending`] with the exact nonlinear curvature, a penalty [`Clamp`] on the tangent
-//! direction at a material point, uniform [`Gravity`] and the [`PointSpring`] of a grab.
+//! direction at a material point, uniform [`Gravity`], the [`PointSpring`] of a grab and the [`Contact`] penalty (self-contact,
+//! cut pieces, floor).
 //! The [`conformance`] module checks any energy (gradient and
 //! Hessian against finite differences, symmetry, definiteness, invariances).
 //!
@@ -32,6 +33,7 @@
 
 mod bending;
 mod clamp;
+pub mod contact;
 pub mod conformance;
 mod energy;
 mod gravity;
@@ -40,6 +42,7 @@ mod stretching;
 
 pub use bending::{Bending, STRETCH_FLOOR};
 pub use clamp::Clamp;
+pub use contact::{Contact, ContactParams, ContactSummary};
 pub use energy::{finite_difference_hessian, Energy};
 pub use gravity::Gravity;
 pub use point_spring::PointSpring;

@@ -1,0 +1,243 @@
+//! The contact penalty: counted once per crossing (also at knots), gradient against
+//! finite differences, Hessian along the normal exact and positive semi-definite,
+//! floor, self-contact on one piece.
+
+use nalgebra::{DMatrix, Vector3};
+use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod};
+use splinerod_energies::{Contact, ContactParams, Energy};
+
+const R: Real = 0.01;
+const K: Real = 1e4;
+
+/// Penalty value, as documented in `contact::penalty`, for the default onset `0.1 r`.
+fn phi(g: Real) -> Real {
+    let d = 0.1 * R;
+    if g >= d {
+        0.0
+    } else if g >= 0.0 {
+        K * (d - g).powi(3) / (6.0 * d)
+    } else {
+        0.5 * K * g * g - 0.5 * K * d * g + K * d * d / 6.0
+    }
+}
+
+/// A rod of length 2 cut at s = 1: piece one along x, piece two along y at height `h`,
+/// crossing piece one at x = `x`.
+fn crossing(h: Real, x: Real) -> Rod {
+    let material = Material {
+        rest_length: 2.0,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, 12, 2.0).unwrap();
+    let mut rod = Rod::straight(
+        material,
+        Box::new(basis),
+        Vector3::zeros(),
+        Vector3::new(2.0, 0.0, 0.0),
+    )
+    .unwrap();
+    rod.cut(1.0).unwrap();
+    let knots = rod.basis().knots().to_vec();
+    for (i, q) in rod.positions.iter_mut().enumerate() {
+        if knots[i] >= 1.0 {
+            *q = Vector3::new(x, q.x - 1.5, h);
+        }
+    }
+    rod
+}
+
+fn contact() -> Contact {
+    Contact::new(ContactParams::new(R, K).unwrap()).unwrap()
+}
+
+fn gradient(e: &dyn Energy, rod: &Rod) -> Vec<Vector3<Real>> {
+    let mut g = vec![Vector3::zeros(); rod.len()];
+    e.add_gradient(rod, &mut g);
+    g
+}
+
+fn hessian(e: &dyn Energy, rod: &Rod) -> DMatrix<Real> {
+    let mut h = BlockBanded::zeros(rod.len(), rod.basis().degree());
+    e.add_hessian(rod, HessianKind::Definite, &mut h);
+    h.to_dense()
+}
+
+#[test]
+fn a_crossing_counts_once_wherever_it_lies_on_the_spans() {
+    let c = contact();
+    let h = 1.9 * R;
+    // Offsets inside spans and exactly on knots (2/9 = span length before the cut).
+    for x in [0.5, 2.0 / 9.0 * 2.0, 2.0 / 9.0 * 3.0, 0.3, 0.61, 0.7] {
+        let rod = crossing(h, x);
+        let summary = c.summary(&rod).unwrap();
+        assert_eq!(summary.pairs, 1, "x = {x}");
+        let e = c.energy(&rod);
+        assert!((e - phi(h - 2.0 * R)).abs() <= 1e-9 * e, "x = {x}: {e}");
+        c.for_each_contact(&rod, |p| {
+            assert!((p.s - x).abs() < 1e-9 && (p.t - 1.5).abs() < 1e-9, "{p:?}");
+            assert!((p.distance - h).abs() < 1e-12);
+        })
+        .unwrap();
+    }
+}
+
+#[test]
+fn apart_means_no_contact_and_no_force() {
+    let c = contact();
+    let rod = crossing(2.2 * R, 0.5);
+    assert_eq!(c.summary(&rod).unwrap().pairs, 0);
+    assert_eq!(c.energy(&rod), 0.0);
+    assert!(gradient(&c, &rod).iter().all(|g| g.norm() == 0.0));
+}
+
+/// The crossing with every control point moved by a smooth deterministic wiggle.
+fn wiggled(h: Real) -> Rod {
+    let mut rod = crossing(h, 0.47);
+    for (i, q) in rod.positions.iter_mut().enumerate() {
+        let f = i as Real;
+        *q += Vector3::new((1.3 * f).sin(), (0.7 * f).cos(), (2.1 * f).sin()) * 2e-3;
+    }
+    rod
+}
+
+#[test]
+fn gradient_matches_finite_differences() {
+    let c = contact();
+    for h in [1.5 * R, 1.95 * R, 2.05 * R] {
+        let rod = wiggled(h);
+        assert!(c.summary(&rod).unwrap().pairs >= 1);
+        let g = gradient(&c, &rod);
+        let scale = g.iter().map(|v| v.amax()).fold(0.0, Real::max);
+        assert!(scale > 0.0);
+        let step = 1e-7;
+        for i in 0..rod.len() {
+            for a in 0..3 {
+                let mut plus = rod.clone();
+                let mut minus = rod.clone();
+                plus.positions[i][a] += step;
+                minus.positions[i][a] -= step;
+                let fd = (c.energy(&plus) - c.energy(&minus)) / (2.0 * step);
+                let err = (fd - g[i][a]).abs();
+                assert!(
+                    err <= 1e-5 * scale,
+                    "h {h}, point {i}.{a}: {fd} vs {}",
+                    g[i][a]
+                );
+            }
+        }
+    }
+}
+
+/// Second difference of the energy along a displacement field `v`.
+fn second_difference(c: &Contact, rod: &Rod, v: &[Vector3<Real>], step: Real) -> Real {
+    let at = |t: Real| {
+        let mut r = rod.clone();
+        r.positions.iter_mut().zip(v).for_each(|(q, d)| *q += d * t);
+        c.energy(&r)
+    };
+    (at(step) - 2.0 * at(0.0) + at(-step)) / (step * step)
+}
+
+#[test]
+fn hessian_is_exact_along_the_normal_zero_along_the_strands_and_semidefinite() {
+    let c = contact();
+    let rod = crossing(1.9 * R, 0.5);
+    let h = hessian(&c, &rod);
+    assert!((&h - h.transpose()).amax() <= 1e-12 * h.amax());
+    let min_eig = h.clone().symmetric_eigenvalues().min();
+    assert!(min_eig >= -1e-9 * h.amax(), "{min_eig}");
+    let knots = rod.basis().knots().to_vec();
+    let flat = |v: &[Vector3<Real>]| {
+        DMatrix::from_iterator(3 * v.len(), 1, v.iter().flat_map(|x| x.iter().copied()))
+    };
+    for dir in [Vector3::z(), Vector3::x(), Vector3::y()] {
+        // Rigid translation of piece two.
+        let v: Vec<_> = (0..rod.len())
+            .map(|i| {
+                if knots[i] >= 1.0 {
+                    dir
+                } else {
+                    Vector3::zeros()
+                }
+            })
+            .collect();
+        let x = flat(&v);
+        let quadratic = (x.transpose() * &h * &x)[(0, 0)];
+        let fd = second_difference(&c, &rod, &v, 1e-6);
+        assert!(
+            (quadratic - fd).abs() <= 1e-4 * K,
+            "{dir:?}: {quadratic} vs {fd}"
+        );
+    }
+}
+
+#[test]
+fn floor_pushes_up_with_the_documented_line_density() {
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, 8, 1.0).unwrap();
+    let depth = 0.2 * R;
+    let y = -1.0 + R - depth;
+    let rod = Rod::straight(
+        material,
+        Box::new(basis),
+        Vector3::new(0.0, y, 0.0),
+        Vector3::new(1.0, y, 0.0),
+    )
+    .unwrap();
+    let params = ContactParams::new(R, K).unwrap().with_floor(-1.0).unwrap();
+    let c = Contact::new(params).unwrap();
+    let expected = phi(-depth) / (2.0 * R);
+    assert!((c.energy(&rod) - expected).abs() <= 1e-9 * expected);
+    let g = gradient(&c, &rod);
+    let total: Vector3<Real> = g.iter().sum();
+    // Force per unit length φ'/(2r) along −y in the gradient (the push is +y).
+    let slope = -(K * depth + 0.5 * K * 0.1 * R) / (2.0 * R);
+    assert!((total.y - slope).abs() <= 1e-9 * slope.abs(), "{total:?}");
+    let h = hessian(&c, &rod);
+    assert!(h.clone().symmetric_eigenvalues().min() >= -1e-9 * h.amax());
+}
+
+#[test]
+fn coils_of_one_piece_touch_each_other_but_not_their_neighbours() {
+    // Two turns of a helix of radius 0.05 m and pitch 1.8 r: turns overlap by 0.2 r.
+    let (radius, pitch, turns) = (0.05, 1.8 * R, 2.0);
+    let n = 40;
+    let length = turns * (std::f64::consts::TAU * radius).hypot(pitch);
+    let material = Material {
+        rest_length: length,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, n, length).unwrap();
+    let positions = (0..n)
+        .map(|i| {
+            let a = std::f64::consts::TAU * turns * i as Real / (n - 1) as Real;
+            Vector3::new(
+                radius * a.cos(),
+                radius * a.sin(),
+                pitch * a / std::f64::consts::TAU,
+            )
+        })
+        .collect();
+    let rod = Rod::new(material, Box::new(basis), positions).unwrap();
+    let c = contact();
+    let summary = c.summary(&rod).unwrap();
+    assert!(summary.pairs >= 10, "{summary:?}");
+    let turn = length / turns;
+    c.for_each_contact(&rod, |p| {
+        assert!(((p.t - p.s).abs() - turn).abs() < 0.2 * turn, "{p:?}");
+        assert!(p.distance < 2.0 * R);
+    })
+    .unwrap();
+    // Bad parameters are named.
+    let err = ContactParams::new(-1.0, K).unwrap_err().to_string();
+    assert!(err.contains("radius"), "{err}");
+    let err = ContactParams::new(R, K)
+        .unwrap()
+        .with_floor(Real::NAN)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("floor"), "{err}");
+}
