@@ -110,6 +110,7 @@ impl Scene {
             let grab = Grab::new(g.at * l, Vector3::from(g.to), times, g.stiffness)?;
             system = system.with_grab(grab);
         }
+        system.contact = self.contact()?;
         Ok(system)
     }
 

@@ -48,6 +48,7 @@ mod run_ensemble;
 pub mod runner;
 pub mod scene;
 mod scene_adapt;
+mod scene_contact;
 mod scene_ensemble;
 mod simulation;
 mod system;

@@ -7,6 +7,7 @@ use crate::{Error, RodSystem, StepReport};
 use nalgebra::Vector3;
 use serde::Serialize;
 use splinerod_core::Real;
+use splinerod_energies::ContactSummary;
 use splinerod_integrators::StaticSolver;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -44,6 +45,28 @@ pub struct SolverTotals {
     pub unconverged_steps: usize,
 }
 
+/// Contact over the run (scenes with `[contact]`).
+#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+pub struct ContactStats {
+    /// Smallest (centre-line distance between touching parts) / (2 · radius) seen at the
+    /// start or at the end of any step; `null` if nothing came within the penalty's reach.
+    pub min_clearance_ratio: Option<Real>,
+    /// Most contacts at once.
+    pub max_pairs: usize,
+}
+
+impl ContactStats {
+    /// Folds in one contact summary of a rod of radius `radius`.
+    pub(crate) fn add(&mut self, summary: &ContactSummary, radius: Real) {
+        self.max_pairs = self.max_pairs.max(summary.pairs);
+        if let Some(d) = summary.min_distance {
+            let ratio = d / (2.0 * radius);
+            self.min_clearance_ratio =
+                Some(self.min_clearance_ratio.map_or(ratio, |r| r.min(ratio)));
+        }
+    }
+}
+
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunResult {
@@ -78,6 +101,9 @@ pub struct RunResult {
     /// then describe member 0, except `wall_seconds` and `solver` (the whole ensemble).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub ensemble: Vec<MemberSummary>,
+    /// Contact statistics (absent without `[contact]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactStats>,
 }
 
 /// What a run accumulated besides the final state.
@@ -90,6 +116,7 @@ pub(crate) struct Tally {
     pub(crate) pin_forces: Vec<Vector3<Real>>,
     pub(crate) history: Vec<[Real; 2]>,
     pub(crate) step_seconds: Vec<Real>,
+    pub(crate) contact: Option<ContactStats>,
 }
 
 impl Tally {
@@ -103,7 +130,21 @@ impl Tally {
             pin_forces: Vec::new(),
             history: vec![[0.0, system.rod.len() as Real]],
             step_seconds: Vec::new(),
+            contact: None,
         }
+    }
+
+    /// Folds in the contacts of `system` now (no-op without contact).
+    pub(crate) fn contact(&mut self, system: &RodSystem) -> Result<(), Error> {
+        if let Some(c) = &system.contact {
+            let summary = c.summary(&system.rod)?;
+            self.contact_summary(&summary, c.params().radius);
+        }
+        Ok(())
+    }
+
+    fn contact_summary(&mut self, summary: &ContactSummary, radius: Real) {
+        self.contact.get_or_insert_default().add(summary, radius);
     }
 
     /// Adds one step's solver counters.
@@ -113,6 +154,14 @@ impl Tally {
         totals.symbolic_analyses += report.solver.symbolic_analyses;
         totals.line_search_cuts += report.solver.line_search_cuts;
         totals.unconverged_steps += usize::from(!report.solver.converged);
+    }
+
+    /// Adds one step's counters and contact summary (`radius` of the rod, m).
+    pub(crate) fn add_step(&mut self, report: &StepReport, radius: Real) {
+        self.add(report);
+        if let Some(summary) = &report.contact {
+            self.contact_summary(summary, radius);
+        }
     }
 
     /// Appends the probed material points of `system` at time `t`.
@@ -195,6 +244,7 @@ fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunR
         g.update(t, rod)?;
     }
     let mut tally = Tally::new(&system, probes_at_start(scene, &system)?);
+    tally.contact(&system)?;
     for o in observers.iter_mut() {
         o.start(&frame(scene, &system, 0.0, 0))?;
     }
@@ -209,6 +259,7 @@ fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunR
         unconverged_steps: 0,
     };
     tally.pin_forces = solver.pin_forces().to_vec();
+    tally.contact(&system)?;
     let result = finish(scene, &system, tally)?;
     notify_finish(observers, &frame(scene, &system, 0.0, 0), result)
 }
@@ -218,6 +269,8 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     let dt = scene.solver.dt.unwrap_or_default();
     let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
     let mut cuts = CutSchedule::new(scene);
+    tally.contact(&sim.system)?;
+    let radius = scene.rod.radius.unwrap_or_default();
     for o in observers.iter_mut() {
         o.start(&frame(scene, &sim.system, 0.0, 0))?;
     }
@@ -225,7 +278,7 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     for _ in 0..scene.step_count() {
         let step_start = Instant::now();
         let report = sim.step(dt)?;
-        tally.add(&report);
+        tally.add_step(&report, radius);
         cuts.apply(sim.time, dt, |s| sim.cut(s))?;
         let wall = step_start.elapsed().as_secs_f64();
         tally.step_seconds.push(wall);
@@ -293,6 +346,7 @@ pub(crate) fn finish(
         control_points_history: tally.history,
         median_step_seconds: median(&mut tally.step_seconds),
         ensemble: Vec::new(),
+        contact: tally.contact,
     })
 }
 
@@ -369,6 +423,15 @@ impl RunResult {
         }
         if self.pieces > 1 {
             out.push_str(&format!("{} pieces after cutting\n", self.pieces));
+        }
+        if let Some(c) = &self.contact {
+            let ratio = c
+                .min_clearance_ratio
+                .map_or("-".into(), |r| format!("{r:.4}"));
+            out.push_str(&format!(
+                "contact: min clearance {ratio} of the diameter, at most {} pairs\n",
+                c.max_pairs
+            ));
         }
         if self.solver.unconverged_steps > 0 {
             out.push_str(&format!(

@@ -6,6 +6,7 @@
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
+pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
 use crate::Error;
 use serde::Deserialize;
@@ -37,6 +38,8 @@ pub struct Scene {
     pub cuts: Vec<CutSpec>,
     /// Many copies of the rod with varied parameters, run together.
     pub ensemble: Option<EnsembleSpec>,
+    /// Self-contact, contact between cut pieces, and a floor.
+    pub contact: Option<ContactSpec>,
 }
 
 /// `[rod]`.
@@ -69,6 +72,8 @@ pub struct RodSpec {
     pub end: Option<[f64; 3]>,
     /// Explicit initial control points (instead of `start`/`end`), m.
     pub initial_control_points: Option<Vec<[f64; 3]>>,
+    /// Radius of the rod's cross-section, m (> 0). Needed by `[contact]`.
+    pub radius: Option<f64>,
 }
 
 fn default_degree() -> usize {
@@ -282,6 +287,11 @@ impl Scene {
                 let reason = "an ensemble needs a time-stepping solver.method";
                 return Err(Error::field("ensemble.count", e.count, reason));
             }
+        }
+        if let Some(c) = &self.contact {
+            c.validate(self.rod.radius)?;
+        } else if let Some(r) = self.rod.radius {
+            positive("rod.radius", r)?;
         }
         crate::scene_adapt::validate(
             self.adaptivity.as_ref(),

@@ -2,14 +2,15 @@
 //! adaptive resolution.
 //!
 //! One step (paper §4.1): move the grabs' targets to the end of the step, integrate
-//! (forces, Jacobians, one sparse solve per Newton iteration), then adapt — insert and
-//! remove knots through the exact maps, telling every energy about each map — and
-//! record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
+//! (forces, Jacobians, one sparse solve per Newton iteration; contact is detected at
+//! every Newton iterate, as part of the forces), then adapt — insert and remove knots
+//! through the exact maps, telling every energy about each map, with the grabs and the
+//! contact points as interactions — and record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
 
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter};
 use splinerod_core::{KnotMap, Real, Rod};
-use splinerod_energies::Energy;
+use splinerod_energies::{ContactSummary, Energy};
 use splinerod_integrators::{Integrator, StepStats};
 use std::time::Instant;
 
@@ -24,6 +25,8 @@ pub struct StepReport {
     pub control_points: usize,
     /// Wall time of the integration stage, s.
     pub integrate_seconds: Real,
+    /// Contacts at the end of the step (`None` without contact).
+    pub contact: Option<ContactSummary>,
 }
 
 /// A rod system, the integrator that advances it and, optionally, the adapt step.
@@ -78,11 +81,14 @@ impl Simulation {
         self.time = end;
         self.steps += 1;
         let adapt = self.adapt()?;
+        let contact = self.system.contact.as_ref();
+        let contact = contact.map(|c| c.summary(&self.system.rod)).transpose()?;
         Ok(StepReport {
             solver,
             adapt,
             control_points: self.system.rod.len(),
             integrate_seconds,
+            contact,
         })
     }
 
@@ -95,6 +101,9 @@ impl Simulation {
         let t = self.system.time;
         let grabs = self.system.grabs.iter().filter(|g| g.active(t));
         self.interactions.extend(grabs.map(|g| g.spring.at));
+        if let Some(contact) = &self.system.contact {
+            contact.interaction_points(&self.system.rod, &mut self.interactions)?;
+        }
         let RodSystem { rod, energies, .. } = &mut self.system;
         let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
         Ok(adapter.adapt(rod, &self.interactions, &mut follow)?)

@@ -1,11 +1,11 @@
 //! [`RodSystem`]: a rod, its pins, its energies and its grabs; the facade's
 //! implementation of the integrators' [`System`] view (the sum of all energies and of
-//! the active grabs' springs).
+//! the active grabs' springs and contact).
 
 use crate::Grab;
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
-use splinerod_energies::Energy;
+use splinerod_energies::{Contact, Energy};
 use splinerod_integrators::System;
 
 /// A rod with pins and a list of energies. All fields are public state.
@@ -20,6 +20,8 @@ pub struct RodSystem {
     pub grabs: Vec<Grab>,
     /// Simulated time the grabs are evaluated at (the end of the step being solved).
     pub time: Real,
+    /// Contact (self, between cut pieces, floor), if the scene has it.
+    pub contact: Option<Contact>,
 }
 
 impl RodSystem {
@@ -31,6 +33,7 @@ impl RodSystem {
             energies: Vec::new(),
             grabs: Vec::new(),
             time: 0.0,
+            contact: None,
         }
     }
 
@@ -43,6 +46,12 @@ impl RodSystem {
     /// Adds a pin (builder style).
     pub fn with_pin(mut self, pin: Pin) -> Self {
         self.pins.push(pin);
+        self
+    }
+
+    /// Adds contact (builder style).
+    pub fn with_contact(mut self, contact: Contact) -> Self {
+        self.contact = Some(contact);
         self
     }
 
@@ -60,12 +69,13 @@ impl RodSystem {
             .map(|g| &g.spring as &dyn Energy)
     }
 
-    /// Every energy acting now: the energies, then the active grabs.
+    /// Every energy acting now: the energies, the active grabs, then contact.
     fn acting(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
         self.energies
             .iter()
             .map(|e| e.as_ref())
             .chain(self.active_grabs())
+            .chain(self.contact.iter().map(|c| c as &dyn Energy))
     }
 
     /// Each acting energy's name and value, in order; terms sharing a name (several
@@ -91,6 +101,7 @@ impl std::fmt::Debug for RodSystem {
             .field("pins", &self.pins)
             .field("energies", &names)
             .field("grabs", &self.grabs)
+            .field("contact", &self.contact.as_ref().map(|c| c.params()))
             .finish()
     }
 }

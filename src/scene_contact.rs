@@ -1,0 +1,84 @@
+//! The `[contact]` scene table (documented in `scenes/README.md`): self-contact of the
+//! rod (and between the pieces of its cuts) and an optional floor, through the penalty
+//! [`Contact`] energy. Unlike other scene lengths, contact lengths are in metres, like
+//! `rod.radius`.
+
+use crate::scene::{non_negative, positive, Scene};
+use crate::Error;
+use serde::Deserialize;
+use splinerod_energies::{Contact, ContactParams};
+
+/// `[contact]`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Contact on. Default true when the table is present.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Penalty stiffness `k`, N/m (> 0): a contact pushes with `k` per metre of overlap.
+    pub stiffness: f64,
+    /// Coulomb friction coefficient (≥ 0). Only 0 is supported for now.
+    #[serde(default)]
+    pub friction: f64,
+    /// Height of a static floor plane `y = floor`, m. Default: no floor.
+    pub floor: Option<f64>,
+    /// Onset layer, m (> 0): the penalty starts when centre lines are `2r + onset` apart.
+    /// Default `0.1 · rod.radius`.
+    pub onset: Option<f64>,
+    /// Points closer than this along the rod never touch, m (≥ 0). Default `π · rod.radius`.
+    pub exclusion: Option<f64>,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl ContactSpec {
+    /// Checks the table against the rod's radius (which it needs).
+    pub fn validate(&self, radius: Option<f64>) -> Result<(), Error> {
+        if !self.enabled {
+            return Ok(());
+        }
+        let Some(r) = radius else {
+            let reason = "contact needs the rod's thickness: set rod.radius";
+            return Err(Error::field("contact.enabled", true, reason));
+        };
+        positive("rod.radius", r)?;
+        positive("contact.stiffness", self.stiffness)?;
+        non_negative("contact.friction", self.friction)?;
+        if self.friction > 0.0 {
+            let reason = "Coulomb friction is not implemented yet; set 0";
+            return Err(Error::field("contact.friction", self.friction, reason));
+        }
+        if let Some(h) = self.floor {
+            if !h.is_finite() {
+                return Err(Error::field("contact.floor", h, "must be finite"));
+            }
+        }
+        if let Some(o) = self.onset {
+            positive("contact.onset", o)?;
+        }
+        if let Some(x) = self.exclusion {
+            non_negative("contact.exclusion", x)?;
+        }
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// The contact energy of `[contact]`, if enabled.
+    pub fn contact(&self) -> Result<Option<Contact>, Error> {
+        let Some(spec) = self.contact.as_ref().filter(|c| c.enabled) else {
+            return Ok(None);
+        };
+        spec.validate(self.rod.radius)?;
+        let radius = self.rod.radius.unwrap_or_default();
+        let mut params = ContactParams::new(radius, spec.stiffness)?;
+        if let Some(h) = spec.floor {
+            params = params.with_floor(h)?;
+        }
+        params.onset = spec.onset.unwrap_or(params.onset);
+        params.exclusion = spec.exclusion.unwrap_or(params.exclusion);
+        Ok(Some(Contact::new(params)?))
+    }
+}
