@@ -1,7 +1,7 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
-use crate::scene::{KnotsSpec, LinearSolverSpec, Method, Scene};
+use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
 use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
@@ -72,8 +72,12 @@ impl Scene {
     pub fn build_system(&self) -> Result<RodSystem, Error> {
         let rod = self.build_rod()?;
         let l = rod.material().rest_length;
-        let mut system =
-            RodSystem::new(rod).with_energy(Stretching::new(self.rod.stretch_stiffness)?);
+        let ea = self.rod.stretch_stiffness;
+        let stretching = match self.rod.rest_shape {
+            RestShape::Arclength => Stretching::new(ea)?,
+            RestShape::Initial => Stretching::with_rest_shape(ea, &rod)?,
+        };
+        let mut system = RodSystem::new(rod).with_energy(stretching);
         if let Some(ei) = self.rod.bending_stiffness {
             let bending = Bending::for_rod(ei, &system.rod)?;
             system = system.with_energy(bending);

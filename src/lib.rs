@@ -39,6 +39,7 @@ mod build;
 mod ensemble;
 mod error;
 mod grab;
+pub mod knot;
 pub mod observe;
 pub mod output;
 pub mod problems;

@@ -46,7 +46,8 @@ pub struct Scene {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RodSpec {
-    /// Rest length `L`, m (> 0).
+    /// Rest length `L`, m (> 0). Required, except with `overhand`, which sets it.
+    #[serde(default = "missing")]
     pub rest_length: f64,
     /// Mass per unit rest length, kg/m (> 0).
     pub linear_density: f64,
@@ -74,10 +75,45 @@ pub struct RodSpec {
     pub initial_control_points: Option<Vec<[f64; 3]>>,
     /// Radius of the rod's cross-section, m (> 0). Needed by `[contact]`.
     pub radius: Option<f64>,
+    /// Initial shape: a loose overhand knot (sets `rest_length` and the control points).
+    pub overhand: Option<OverhandShape>,
+    /// Stress-free state of stretching: `"arclength"` (default: `s` is rest arclength)
+    /// or `"initial"` (the initial curve, the paper's I₀).
+    #[serde(default)]
+    pub rest_shape: RestShape,
+}
+
+/// `rod.rest_shape`.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RestShape {
+    /// The material coordinate is rest arclength: unit speed is unstrained.
+    #[default]
+    Arclength,
+    /// The initial curve is unstrained (rest metric \\(|I_0'(s)|^2\\)).
+    Initial,
+}
+
+/// `[rod.overhand]`: the initial shape of [`crate::knot::overhand_knot`].
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OverhandShape {
+    /// Outer diameter of the knot seen from above, m (> 0).
+    pub size: f64,
+    /// Distance between the two ends, which lie at `(±span/2, 0, 0)`, m.
+    pub span: f64,
 }
 
 fn default_degree() -> usize {
     3
+}
+
+/// Marks a missing `rod.rest_length` (only `rod.overhand` may fill it in): a value no
+/// scene uses, distinct from any NaN or infinity a scene might give.
+const MISSING_LENGTH: f64 = f64::MIN;
+
+fn missing() -> f64 {
+    MISSING_LENGTH
 }
 
 /// `rod.knots`: a named layout or an explicit vector.
@@ -211,7 +247,8 @@ impl Default for OutputSpec {
 impl Scene {
     /// Parses and validates a scene from TOML text.
     pub fn from_toml(text: &str) -> Result<Self, Error> {
-        let scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
+        let mut scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
+        scene.resolve_shape()?;
         scene.validate()?;
         Ok(scene)
     }
@@ -227,6 +264,56 @@ impl Scene {
             Error::Scene(m) => Error::Scene(format!("{}: {m}", path.display())),
             other => other,
         })
+    }
+
+    /// Fills in `rod.rest_length` and `rod.initial_control_points` from `rod.overhand`;
+    /// errors if the scene also gives them, or if `rest_length` is missing without it.
+    pub fn resolve_shape(&mut self) -> Result<(), Error> {
+        let r = &mut self.rod;
+        let Some(shape) = r.overhand else {
+            if r.rest_length == MISSING_LENGTH {
+                return Err(Error::Scene(
+                    "missing field `rod.rest_length` (required unless rod.overhand gives the shape)"
+                        .into(),
+                ));
+            }
+            return Ok(());
+        };
+        let given = [
+            ("rod.rest_length", r.rest_length != MISSING_LENGTH),
+            (
+                "rod.initial_control_points",
+                r.initial_control_points.is_some(),
+            ),
+            ("rod.start", r.start.is_some()),
+            ("rod.end", r.end.is_some()),
+            ("rod.knots", r.knots != KnotsSpec::default()),
+        ];
+        if let Some((field, _)) = given.iter().find(|g| g.1) {
+            let reason = "rod.overhand sets the shape and the rest length: remove one of them";
+            return Err(Error::field(*field, "given", reason));
+        }
+        let spec = crate::knot::OverhandSpec {
+            size: shape.size,
+            span: shape.span,
+            control_points: r.control_points,
+            degree: r.degree,
+        };
+        let knot = crate::knot::overhand_knot(&spec).map_err(|e| match e {
+            Error::InvalidField {
+                field,
+                value,
+                reason,
+            } => Error::InvalidField {
+                field: format!("rod.overhand.{field}"),
+                value,
+                reason,
+            },
+            other => other,
+        })?;
+        r.rest_length = knot.rest_length;
+        r.initial_control_points = Some(knot.control_points.iter().map(|p| (*p).into()).collect());
+        Ok(())
     }
 
     /// Range checks of every value; the error names the field.

@@ -33,8 +33,8 @@
 #![warn(missing_docs)]
 
 pub mod banded;
-pub mod block_banded;
 pub mod basis;
+pub mod block_banded;
 pub mod bspline;
 mod cutting;
 mod error;
@@ -49,8 +49,8 @@ pub mod rod;
 pub type Real = f64;
 
 pub use banded::SymBanded;
-pub use block_banded::{BlockBanded, FarBlock};
 pub use basis::{BasisSpace, BasisValues, Span, MAX_DEGREE};
+pub use block_banded::{BlockBanded, FarBlock};
 pub use bspline::BSplineSpace;
 pub use error::CoreError;
 pub use knot_map::{Coefficient, KnotMap, KnotOperation};

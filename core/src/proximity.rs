@@ -39,7 +39,7 @@
 
 pub mod narrow;
 
-pub use narrow::{closest_points, Closest};
+pub use narrow::{closest_points, closest_points_between, Closest};
 
 use crate::basis::{spans, Span};
 use crate::rod::{check_finite, non_negative};

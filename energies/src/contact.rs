@@ -2,38 +2,42 @@
 //! pieces of its cuts, and above a floor plane (paper §3.2: collision detection and
 //! response before the forces; the paper's response is a penalty too).
 //!
-//! **Self-contact.** For each contact between parts of the rod (see [`detect`]: broad
-//! phase over span boxes, closest points between spans on the curve), with centre-line
-//! distance \\(d = |C(s) - C(t)|\\) and gap \\(g = d - 2r\\),
+//! **Self-contact.** A repulsive potential between material points of the rod: with
+//! centre-line distance \\(d(s, t) = |C(s) - C(t)|\\) and gap \\(g = d - 2r\\),
 //!
-//! \\[ E = \sum_{\text{contacts}} \phi(g), \qquad
-//! \frac{\partial E}{\partial q_i} = \phi'(g)\, w_i\, n, \qquad
-//! w_i = b_i(s) - b_i(t), \quad n = \frac{C(s) - C(t)}{d}, \\]
+//! \\[ E = \frac{1}{(2r)^2} \iint_{|s - t| \gtrsim \text{exclusion}} \phi\big(g(s, t)\big)\,
+//! ds\, dt \approx \sum_{(a, b)} \frac{w_a w_b}{(2r)^2}\, \phi(g_{ab}), \\]
 //!
-//! with the penalty \\(\phi\\) of [`penalty`] (stiffness `k`, onset layer `δ`). The
-//! gradient is exact: the closest points minimise the distance, so their motion does
-//! not change it to first order. The Hessian used for both [`HessianKind`]s is
-//! \\(\phi''(g)\, w w^T \otimes n n^T\\), the exact Hessian of the distance between two
-//! crossing straight segments; it is positive semi-definite and drops the curvature
-//! term \\(\phi'/d\, (I - n n^T)\\), which is negative and, for crossing strands,
-//! cancelled by the sliding of the closest points. It couples control points far apart
-//! on the rod, so it is assembled with [`BlockBanded::add_coupling`].
+//! with the penalty \\(\phi\\) of the `penalty` module (stiffness `k`, onset layer `δ`) and the
+//! double integral sampled on material points `s_a` with weights `w_a` (see [`detect`]:
+//! contact segments, a broad phase over bounding balls, sample pairs within the reach
+//! `2r + δ`). Crossing strands and strands lying alongside each other are the same
+//! case: the energy of a line contact grows with its length, and nothing jumps when a
+//! contact slides or changes type. With \\(u_i = b_i(s_a) - b_i(s_b)\\) and
+//! \\(n = (C(s_a) - C(s_b))/d\\), each pair adds \\(\tfrac{w_a w_b}{(2r)^2} \phi'(g)\,
+//! u_i\, n\\) to the gradient (exact) and
+//! \\(\tfrac{w_a w_b}{(2r)^2} \phi''(g)\, u u^T \otimes n n^T\\) to the Hessian for both
+//! [`HessianKind`]s: positive semi-definite, without the negative curvature term
+//! \\(\phi'/d\, (I - n n^T)\\). It couples control points far apart on the rod, so it
+//! is assembled with [`BlockBanded::add_coupling`]. A crossing with overlap `p` resists
+//! with a force of about \\(\pi k p^2 / (2r)\\) (the patch where the strands overlap
+//! grows with `p`).
 //!
 //! **Floor.** A plane \\(n_f \cdot x = h\\) pushes on the rod's quadrature points with
 //! the gap \\(g(s) = n_f \cdot C(s) - h - r\\) and the energy per unit rest length
 //! \\(\tfrac{1}{2r}\, \phi(g(s))\\): a length of rod equal to its diameter pressed into
 //! the floor resists like one self-contact.
 //!
-//! **What is not modelled:** friction; contacts between points less than `exclusion`
-//! apart in rest arclength (they are neighbours: a rod bent to radius `r` first touches
-//! itself at \\(\pi r\\), the default); and contacts within two adjacent spans, which the
-//! broad phase skips (refinement keeps spans short where the rod touches itself).
+//! **What is not modelled:** friction; contacts between segments less than `exclusion`
+//! apart along the rod (neighbours: a rod bent to radius `r` first touches itself at
+//! \\(\pi r\\), the default), which ignores loops shorter than `exclusion + 2 segment`
+//! (about `7.3 r` by default: a loop of radius 1.2 r, tighter than the rod allows).
 
 pub mod detect;
 mod penalty;
 
 use crate::Energy;
-use detect::{ContactPoint, Detector};
+use detect::{ContactPoint, Detector, SamplePair};
 use nalgebra::{Matrix3, Vector3};
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
@@ -51,8 +55,15 @@ pub struct ContactParams {
     /// Onset layer `δ` (> 0): the penalty starts at gap `δ` and reaches stiffness `k` at
     /// gap 0. Default `0.1 r`.
     pub onset: Real,
-    /// Points closer than this in rest arclength never touch (≥ 0). Default `π r`.
+    /// Contact segments closer than this along the rod never touch (≥ 0). Default `π r`.
     pub exclusion: Real,
+    /// Length of the contact segments of the broad phase (> 0), in rest arclength.
+    /// Default `2.1 r`.
+    pub segment: Real,
+    /// Largest distance between material sample points along the rod (> 0), m of rest
+    /// arclength. It must resolve the contact patch (about \\(2\sqrt{2r\delta}\\) wide
+    /// across a crossing). Default `0.2 r`.
+    pub spacing: Real,
     /// Floor plane `(n_f, h)`: unit normal and height, the rod staying on the `+n_f` side.
     pub floor: Option<(Vector3<Real>, Real)>,
 }
@@ -68,6 +79,8 @@ impl ContactParams {
             stiffness,
             onset: 0.1 * radius,
             exclusion: std::f64::consts::PI * radius,
+            segment: 2.1 * radius,
+            spacing: 0.2 * radius,
             floor: None,
         })
     }
@@ -91,6 +104,8 @@ impl ContactParams {
         positive("stiffness", self.stiffness)?;
         positive("onset", self.onset)?;
         non_negative("exclusion", self.exclusion)?;
+        positive("segment", self.segment)?;
+        positive("spacing", self.spacing)?;
         if let Some((normal, height)) = self.floor {
             let unit = (normal.norm() - 1.0).abs() < 1e-12;
             if !unit || !height.is_finite() {
@@ -133,9 +148,9 @@ impl Clone for Contact {
 /// What the detection found at the rod's current positions.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactSummary {
-    /// Contacts (pairs closer than the reach `2r + δ`).
+    /// Contacts: pairs of contact segments closer than the reach `2r + δ`.
     pub pairs: usize,
-    /// Candidate span pairs of the broad phase.
+    /// Candidate segment pairs of the broad phase.
     pub candidates: usize,
     /// Smallest centre-line distance among the contacts, m (`None` without contacts).
     pub min_distance: Option<Real>,
@@ -162,27 +177,32 @@ impl Contact {
 
     fn detected(&self, rod: &Rod) -> Result<MutexGuard<'_, Detector>, CoreError> {
         let mut detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
-        detector.detect(rod, self.params.reach(), self.params.exclusion)?;
+        let p = &self.params;
+        detector.detect(rod, p.reach(), p.exclusion, [p.segment, p.spacing])?;
         Ok(detector)
     }
 
-    /// Runs `f` on each contact at the rod's positions.
+    /// Runs `f` on the closest points of every pair of contact segments closer than the
+    /// reach (computed on the curve; not needed by the energy itself).
     pub fn for_each_contact(
         &self,
         rod: &Rod,
         mut f: impl FnMut(&ContactPoint),
     ) -> Result<(), CoreError> {
-        self.detected(rod)?.contacts.iter().for_each(&mut f);
+        let mut d = self.detected(rod)?;
+        d.closest(rod, self.params.reach())?;
+        d.closest.iter().for_each(&mut f);
         Ok(())
     }
 
     /// Counts and closest distance of the contacts at the rod's positions.
     pub fn summary(&self, rod: &Rod) -> Result<ContactSummary, CoreError> {
-        let d = self.detected(rod)?;
-        let min_distance = d.contacts.iter().map(|c| c.distance).reduce(Real::min);
+        let mut d = self.detected(rod)?;
+        d.closest(rod, self.params.reach())?;
+        let min_distance = d.closest.iter().map(|c| c.distance).reduce(Real::min);
         Ok(ContactSummary {
-            pairs: d.contacts.len(),
-            candidates: d.candidates,
+            pairs: d.closest.len(),
+            candidates: d.candidate_count(),
             min_distance,
         })
     }
@@ -193,8 +213,14 @@ impl Contact {
         self.for_each_contact(rod, |c| out.extend([c.s, c.t]))
     }
 
-    fn gap(&self, c: &ContactPoint) -> Real {
-        c.distance - 2.0 * self.params.radius
+    /// Weight of a sample pair: \\(w_a w_b / (2r)^2\\).
+    fn pair_weight(&self, d: &Detector, pair: &SamplePair) -> Real {
+        let w = &d.samples.weight;
+        w[pair.a as usize] * w[pair.b as usize] / (4.0 * self.params.radius.powi(2))
+    }
+
+    fn gap(&self, pair: &SamplePair) -> Real {
+        pair.distance - 2.0 * self.params.radius
     }
 
     /// Calls `f(point, weight, basis row)` at every quadrature point with the floor gap.
@@ -216,15 +242,15 @@ impl Contact {
     }
 }
 
-/// Merged weights \\(w_i = b_i(s) - b_i(t)\\) of a contact: at most `2 · MAX_ORDER`
-/// control points.
-fn contact_weights(c: &ContactPoint, out: &mut [(usize, Real); 2 * MAX_ORDER]) -> usize {
+/// Merged weights \\(u_i = b_i(s_a) - b_i(s_b)\\) of a sample pair: at most
+/// `2 · MAX_ORDER` control points.
+fn pair_rows(d: &Detector, pair: &SamplePair, out: &mut [(usize, Real); 2 * MAX_ORDER]) -> usize {
     let mut len = 0;
-    let rows = [(&c.row_s, 1.0), (&c.row_t, -1.0)];
-    for (row, sign) in rows {
-        for k in 0..row.order {
-            let i = row.first + k;
-            let w = sign * row.value[k];
+    let samples = &d.samples;
+    for (k, sign) in [(pair.a as usize, 1.0), (pair.b as usize, -1.0)] {
+        let first = samples.first[k] as usize;
+        for (a, &b) in samples.row(k).iter().enumerate() {
+            let (i, w) = (first + a, sign * b);
             match out[..len].iter_mut().find(|(j, _)| *j == i) {
                 Some((_, total)) => *total += w,
                 None => {
@@ -247,9 +273,9 @@ impl Energy for Contact {
             return Real::NAN;
         };
         let mut e: Real = d
-            .contacts
+            .pairs
             .iter()
-            .map(|c| self.penalty.value(self.gap(c)))
+            .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(c)))
             .sum();
         drop(d);
         self.for_each_floor_point(rod, |g, w, _, _| e += w * self.penalty.value(g));
@@ -264,9 +290,9 @@ impl Energy for Contact {
             return;
         };
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
-        for c in &d.contacts {
-            let force = c.normal * self.penalty.slope(self.gap(c));
-            let len = contact_weights(c, &mut weights);
+        for c in &d.pairs {
+            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(c)));
+            let len = pair_rows(&d, c, &mut weights);
             for &(i, w) in &weights[..len] {
                 gradient[i] += force * w;
             }
@@ -287,9 +313,10 @@ impl Energy for Contact {
             return;
         };
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
-        for c in &d.contacts {
-            let nn = c.normal * c.normal.transpose() * self.penalty.curvature(self.gap(c));
-            let len = contact_weights(c, &mut weights);
+        for c in &d.pairs {
+            let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(c));
+            let nn = c.normal * c.normal.transpose() * stiffness;
+            let len = pair_rows(&d, c, &mut weights);
             for (a, &(i, wi)) in weights[..len].iter().enumerate() {
                 for &(j, wj) in &weights[a..len] {
                     hessian.add_coupling(i, j, &(nn * (wi * wj)));

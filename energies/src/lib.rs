@@ -33,8 +33,8 @@
 
 mod bending;
 mod clamp;
-pub mod contact;
 pub mod conformance;
+pub mod contact;
 mod energy;
 mod gravity;
 mod point_spring;

@@ -1,6 +1,13 @@
 //! Continuous Green–Lagrange stretching (paper eq. 11–12).
 //!
-//! With rest arclength `s` (\\(\partial l_0/\partial s = 1\\)) and \\(\gamma^2 = |C'|^2\\):
+//! The rest state is either the parametrisation itself — `s` is rest arclength,
+//! \\(\partial l_0/\partial s = 1\\), the default — or, as in the paper, an initial curve
+//! \\(I_0\\) with rest metric \\(g_0(s) = |I_0'(s)|^2\\) ([`Stretching::with_rest_shape`]).
+//! With Green–Lagrange strain \\(\varepsilon = (\gamma^2 - g_0)/(2 g_0)\\) and
+//! \\(dl_0 = \sqrt{g_0}\, ds\\) the energy is
+//! \\(\tfrac{EA}{8}\int (\gamma^2 - g_0)^2 g_0^{-3/2}\, ds\\): the formulas below with
+//! `1` replaced by \\(g_0\\) and a factor \\(g_0^{-3/2}\\) on every density. For
+//! \\(g_0 = 1\\) and \\(\gamma^2 = |C'|^2\\):
 //!
 //! \\[ E = \frac{EA}{8} \int_0^L (\gamma^2 - 1)^2\, ds, \qquad
 //! \frac{\partial E}{\partial q_i} = \frac{EA}{2} \int_0^L (\gamma^2 - 1)\, b_i'\, C'\, ds, \\]
@@ -13,24 +20,86 @@
 //! across it, so it is indefinite in compression. [`HessianKind::Definite`] clamps both
 //! eigenvalues at zero (the nearest positive semi-definite matrix); forces stay exact.
 //! The integrands are polynomials of degree `4(d − 1)`, integrated exactly by the rod's
-//! quadrature table.
+//! quadrature table (with a rest curve, \\(g_0^{-3/2}\\) is not polynomial: the table
+//! integrates it to its own accuracy, and \\(g_0\\) is re-tabulated after every change of
+//! knots).
 
 use crate::Energy;
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, QuadPoint, Real, Rod};
+use splinerod_core::{
+    BasisSpace, BasisValues, BlockBanded, CoreError, HessianKind, KnotMap, QuadPoint, Real, Rod,
+};
+use std::sync::Arc;
 
 /// Green–Lagrange stretching with axial stiffness `EA = Y·r` (N).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Stretching {
     /// Axial stiffness `EA`, N.
     pub stiffness: Real,
+    rest: Option<RestMetric>,
+}
+
+/// A rest curve: its basis and control points.
+type RestCurve = (Box<dyn BasisSpace>, Vec<Vector3<Real>>);
+
+/// A rest curve \\(I_0\\) and its metric \\(g_0 = |I_0'|^2\\) at the rod's quadrature points.
+#[derive(Debug, Clone)]
+struct RestMetric {
+    curve: Arc<RestCurve>,
+    g0: Vec<Real>,
+}
+
+impl RestMetric {
+    /// Tabulates \\(g_0\\) at the quadrature points of `rod`; errors where it vanishes.
+    fn tabulate(&mut self, rod: &Rod) -> Result<(), CoreError> {
+        let (basis, points) = &*self.curve;
+        let mut b = BasisValues::default();
+        self.g0.clear();
+        for qp in rod.quadrature().points() {
+            basis.evaluate(qp.s, &mut b)?;
+            let g0 = b.combine(&b.d1, points).norm_squared();
+            if !(g0.is_finite() && g0 > 0.0) {
+                return Err(CoreError::InvalidParameter {
+                    name: "rest shape",
+                    value: qp.s,
+                    reason: "the rest curve has zero speed at this material coordinate",
+                });
+            }
+            self.g0.push(g0);
+        }
+        Ok(())
+    }
 }
 
 impl Stretching {
-    /// Stretching energy with stiffness `EA > 0`.
+    /// Stretching energy with stiffness `EA > 0`, at rest when `s` is arclength.
     pub fn new(stiffness: Real) -> Result<Self, CoreError> {
         splinerod_core::rod::positive("stretch_stiffness", stiffness)?;
-        Ok(Self { stiffness })
+        Ok(Self {
+            stiffness,
+            rest: None,
+        })
+    }
+
+    /// Stretching energy with stiffness `EA > 0` whose rest state is the current shape of
+    /// `rod` (the paper's \\(I_0\\)): a rod not parametrised by arclength starts unstrained.
+    /// Errors if the curve has zero speed somewhere.
+    pub fn with_rest_shape(stiffness: Real, rod: &Rod) -> Result<Self, CoreError> {
+        let mut s = Self::new(stiffness)?;
+        let curve = Arc::new((rod.basis().clone_box(), rod.positions.clone()));
+        let mut rest = RestMetric {
+            curve,
+            g0: Vec::new(),
+        };
+        rest.tabulate(rod)?;
+        s.rest = Some(rest);
+        Ok(s)
+    }
+
+    /// Rest metric at quadrature point `p` (1 without a rest curve).
+    #[inline]
+    fn g0(&self, p: usize) -> Real {
+        self.rest.as_ref().map_or(1.0, |r| r.g0[p])
     }
 
     /// Tension \\(T(\gamma) = \tfrac{EA}{2}\gamma(\gamma^2 - 1)\\) at stretch `γ`.
@@ -38,17 +107,18 @@ impl Stretching {
         0.5 * self.stiffness * gamma * (gamma * gamma - 1.0)
     }
 
-    /// The 3×3 density Hessian `H(C')`, clamped to PSD for [`HessianKind::Definite`].
-    fn density_hessian(&self, c1: &Vector3<Real>, kind: HessianKind) -> Matrix3<Real> {
-        let ea = self.stiffness;
+    /// The 3×3 density Hessian `H(C')` for rest metric `g0`, clamped to PSD for
+    /// [`HessianKind::Definite`].
+    fn density_hessian(&self, c1: &Vector3<Real>, g0: Real, kind: HessianKind) -> Matrix3<Real> {
+        let ea = self.stiffness * rest_scale(g0);
         let g2 = c1.norm_squared();
-        // H = across·I + β C'C'ᵀ with across = EA(γ²−1)/2 and β = (along − across)/γ² = EA.
+        // H = across·I + β C'C'ᵀ with across = EA(γ²−g₀)/2 and β = (along − across)/γ² = EA.
         let (across, beta) = match kind {
-            HessianKind::Exact => (0.5 * ea * (g2 - 1.0), ea),
-            _ if g2 >= 1.0 => (0.5 * ea * (g2 - 1.0), ea),
+            HessianKind::Exact => (0.5 * ea * (g2 - g0), ea),
+            _ if g2 >= g0 => (0.5 * ea * (g2 - g0), ea),
             // Compression: the transverse eigenvalue is clamped to 0, the axial one too
-            // below γ² = 1/3.
-            _ if 3.0 * g2 > 1.0 => (0.0, 0.5 * ea * (3.0 * g2 - 1.0) / g2),
+            // below γ² = g₀/3.
+            _ if 3.0 * g2 > g0 => (0.0, 0.5 * ea * (3.0 * g2 - g0) / g2),
             _ => (0.0, 0.0),
         };
         let mut h = c1 * c1.transpose() * beta;
@@ -56,6 +126,16 @@ impl Stretching {
             h[(k, k)] += across;
         }
         h
+    }
+}
+
+/// \\(g_0^{-3/2}\\), exactly 1 for the default rest state.
+#[inline]
+fn rest_scale(g0: Real) -> Real {
+    if g0 == 1.0 {
+        1.0
+    } else {
+        1.0 / (g0 * g0.sqrt())
     }
 }
 
@@ -79,18 +159,20 @@ impl Energy for Stretching {
         let k = self.stiffness / 8.0;
         rod.quadrature()
             .points()
-            .map(|qp| {
-                let e = tangent(&qp, &rod.positions).norm_squared() - 1.0;
-                qp.weight * k * e * e
+            .enumerate()
+            .map(|(p, qp)| {
+                let g0 = self.g0(p);
+                let e = tangent(&qp, &rod.positions).norm_squared() - g0;
+                qp.weight * k * e * e * rest_scale(g0)
             })
             .sum()
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         let half = 0.5 * self.stiffness;
-        for qp in rod.quadrature().points() {
-            let c1 = tangent(&qp, &rod.positions);
-            let f = c1 * (qp.weight * half * (c1.norm_squared() - 1.0));
+        for (p, qp) in rod.quadrature().points().enumerate() {
+            let (c1, g0) = (tangent(&qp, &rod.positions), self.g0(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * rest_scale(g0));
             for (a, &da) in qp.d1.iter().enumerate() {
                 gradient[qp.first + a] += f * da;
             }
@@ -98,13 +180,22 @@ impl Energy for Stretching {
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
-        for qp in rod.quadrature().points() {
+        for (p, qp) in rod.quadrature().points().enumerate() {
             let c1 = tangent(&qp, &rod.positions);
-            let h = self.density_hessian(&c1, kind) * qp.weight;
+            let h = self.density_hessian(&c1, self.g0(p), kind) * qp.weight;
             for (a, &da) in qp.d1.iter().enumerate() {
                 for (b, &db) in qp.d1.iter().enumerate().skip(a) {
                     hessian.add_block(qp.first + a, qp.first + b, &(h * (da * db)));
                 }
+            }
+        }
+    }
+
+    fn on_knot_change(&mut self, rod: &Rod, _map: &KnotMap) {
+        if let Some(rest) = &mut self.rest {
+            // The rest curve was regular where tabulated first; it stays so at any s.
+            if rest.tabulate(rod).is_err() {
+                rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
             }
         }
     }

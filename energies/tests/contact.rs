@@ -63,22 +63,43 @@ fn hessian(e: &dyn Energy, rod: &Rod) -> DMatrix<Real> {
 }
 
 #[test]
-fn a_crossing_counts_once_wherever_it_lies_on_the_spans() {
+fn a_crossing_is_found_on_the_curve_and_slides_smoothly() {
     let c = contact();
     let h = 1.9 * R;
+    let mut energies = Vec::new();
     // Offsets inside spans and exactly on knots (2/9 = span length before the cut).
     for x in [0.5, 2.0 / 9.0 * 2.0, 2.0 / 9.0 * 3.0, 0.3, 0.61, 0.7] {
         let rod = crossing(h, x);
         let summary = c.summary(&rod).unwrap();
-        assert_eq!(summary.pairs, 1, "x = {x}");
-        let e = c.energy(&rod);
-        assert!((e - phi(h - 2.0 * R)).abs() <= 1e-9 * e, "x = {x}: {e}");
+        assert!(summary.pairs >= 1, "x = {x}");
+        assert!((summary.min_distance.unwrap() - h).abs() < 1e-12, "x = {x}");
         c.for_each_contact(&rod, |p| {
-            assert!((p.s - x).abs() < 1e-9 && (p.t - 1.5).abs() < 1e-9, "{p:?}");
-            assert!((p.distance - h).abs() < 1e-12);
+            assert!(p.distance < c.params().reach());
+            assert!((p.s - x).abs() < 2.0 * c.params().segment, "{p:?}");
         })
         .unwrap();
+        energies.push(c.energy(&rod));
     }
+    // Sliding along the other strand changes only the sampling of the double integral.
+    let mean = energies.iter().sum::<Real>() / energies.len() as Real;
+    for e in &energies {
+        assert!((e - mean).abs() <= 0.02 * mean, "{energies:?}");
+    }
+    // The double integral of a perpendicular crossing at height h: with
+    // d ≈ h + ρ²/(2h), ∬ φ du dv = 2πh ∫_{-p}^{δ} φ(g) dg, divided by (2r)².
+    let p = 2.0 * R - h;
+    let n = 2000;
+    let integral: Real = (0..n)
+        .map(|i| {
+            let g = -p + (i as Real + 0.5) * (p + 0.1 * R) / n as Real;
+            phi(g) * (p + 0.1 * R) / n as Real
+        })
+        .sum();
+    let expected = std::f64::consts::PI * h / (2.0 * R * R) * integral;
+    assert!(
+        (mean - expected).abs() <= 0.05 * expected,
+        "{mean} vs {expected}"
+    );
 }
 
 #[test]
@@ -139,7 +160,7 @@ fn second_difference(c: &Contact, rod: &Rod, v: &[Vector3<Real>], step: Real) ->
 }
 
 #[test]
-fn hessian_is_exact_along_the_normal_zero_along_the_strands_and_semidefinite() {
+fn hessian_is_semidefinite_and_matches_along_the_normal() {
     let c = contact();
     let rod = crossing(1.9 * R, 0.5);
     let h = hessian(&c, &rod);
@@ -150,24 +171,35 @@ fn hessian_is_exact_along_the_normal_zero_along_the_strands_and_semidefinite() {
     let flat = |v: &[Vector3<Real>]| {
         DMatrix::from_iterator(3 * v.len(), 1, v.iter().flat_map(|x| x.iter().copied()))
     };
-    for dir in [Vector3::z(), Vector3::x(), Vector3::y()] {
-        // Rigid translation of piece two.
+    // Rigid translation of piece two along the normal, then along each strand.
+    let mut quadratic = [0.0; 3];
+    let mut fd = [0.0; 3];
+    for (k, dir) in [Vector3::z(), Vector3::x(), Vector3::y()]
+        .iter()
+        .enumerate()
+    {
         let v: Vec<_> = (0..rod.len())
             .map(|i| {
                 if knots[i] >= 1.0 {
-                    dir
+                    *dir
                 } else {
                     Vector3::zeros()
                 }
             })
             .collect();
         let x = flat(&v);
-        let quadratic = (x.transpose() * &h * &x)[(0, 0)];
-        let fd = second_difference(&c, &rod, &v, 1e-6);
-        assert!(
-            (quadratic - fd).abs() <= 1e-4 * K,
-            "{dir:?}: {quadratic} vs {fd}"
-        );
+        quadratic[k] = (x.transpose() * &h * &x)[(0, 0)];
+        fd[k] = second_difference(&c, &rod, &v, 1e-6);
+    }
+    // Along the normal the dropped curvature term is small: the overlap patch is narrow.
+    assert!(
+        (quadratic[0] - fd[0]).abs() <= 0.1 * fd[0],
+        "{quadratic:?} vs {fd:?}"
+    );
+    // Sliding along a strand: both are small next to the normal stiffness.
+    for k in 1..3 {
+        assert!(quadratic[k].abs() <= 0.05 * quadratic[0], "{quadratic:?}");
+        assert!(fd[k].abs() <= 0.1 * fd[0], "{fd:?}");
     }
 }
 
@@ -225,6 +257,7 @@ fn coils_of_one_piece_touch_each_other_but_not_their_neighbours() {
     let c = contact();
     let summary = c.summary(&rod).unwrap();
     assert!(summary.pairs >= 10, "{summary:?}");
+    assert!(c.energy(&rod) > 0.0);
     let turn = length / turns;
     c.for_each_contact(&rod, |p| {
         assert!(((p.t - p.s).abs() - turn).abs() < 0.2 * turn, "{p:?}");

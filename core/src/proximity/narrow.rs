@@ -68,6 +68,22 @@ pub fn closest_points(rod: &Rod, span_a: &Span, span_b: &Span) -> Result<Closest
     Ok(closest_points_counted(rod, span_a, span_b)?.0)
 }
 
+/// Closest points between the curve pieces on the parameter ranges `range_a` and
+/// `range_b` (each `[lo, hi]` inside the domain, any number of knot spans): the same
+/// iteration as [`closest_points`], with the curve evaluated through the basis at each
+/// parameter. Across a knot of reduced continuity the derivatives are one-sided, which
+/// at worst slows the iteration down. Errors if a range is empty, not finite or leaves
+/// the domain.
+pub fn closest_points_between(
+    rod: &Rod,
+    range_a: [Real; 2],
+    range_b: [Real; 2],
+) -> Result<Closest, CoreError> {
+    let a = SpanCurve::range(rod, range_a)?;
+    let b = SpanCurve::range(rod, range_b)?;
+    Ok(solve(&a, &b)?.0)
+}
+
 /// [`closest_points`] and the number of Newton steps it took.
 pub(crate) fn closest_points_counted(
     rod: &Rod,
@@ -76,9 +92,14 @@ pub(crate) fn closest_points_counted(
 ) -> Result<(Closest, usize), CoreError> {
     let a = SpanCurve::new(rod, span_a)?;
     let b = SpanCurve::new(rod, span_b)?;
-    let mut x = grid_start(&a, &b)?;
+    solve(&a, &b)
+}
+
+/// The closest points of two span curves and the Newton steps taken.
+fn solve(a: &SpanCurve, b: &SpanCurve) -> Result<(Closest, usize), CoreError> {
+    let mut x = grid_start(a, b)?;
     for step in 1..=MAX_STEPS {
-        let (next, converged) = newton_step(&a, &b, &x)?;
+        let (next, converged) = newton_step(a, b, &x)?;
         x = next;
         if converged {
             return Ok((x.closest(), step));
@@ -120,6 +141,19 @@ impl<'a> SpanCurve<'a> {
             lo: span.start,
             hi,
         })
+    }
+
+    /// The curve on `[lo, hi]`, which must lie in the domain.
+    fn range(rod: &'a Rod, [lo, hi]: [Real; 2]) -> Result<Self, CoreError> {
+        let (start, end) = rod.basis().domain();
+        if !(start <= lo && lo <= hi && hi <= end) {
+            return Err(CoreError::InvalidParameter {
+                name: "range",
+                value: lo,
+                reason: "must be a finite non-empty interval inside the domain",
+            });
+        }
+        Ok(Self { rod, lo, hi })
     }
 
     fn length(&self) -> Real {

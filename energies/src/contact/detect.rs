@@ -1,27 +1,39 @@
-//! Contact detection between parts of one rod: the broad phase of
-//! [`SpanBoxes`](splinerod_core::proximity::SpanBoxes) (boxes inflated by half the
-//! reach, so every pair of spans closer than the reach is a candidate; only adjacent
-//! spans are skipped), then [`closest_points`] on each candidate pair.
+//! Contact detection between parts of one rod, on *contact segments*: the rest arclength
+//! of each piece (between cuts) is divided at the multiples of a length `ℓ`, whatever
+//! the knots, so the segments — and the contact energy — do not change when knots are
+//! inserted or removed.
 //!
-//! A candidate becomes a contact when its closest points are closer than the reach and
-//! at least `exclusion` apart in rest arclength: closer points are neighbours on the
-//! rod, not a contact — also across a cut, whose two new ends start at one point and
-//! separate freely instead of being blown apart by the penalty. A closest point at a span boundary is counted
-//! once: a point at the end of a span belongs to the next span of the same piece (which
-//! finds it at its start or inside); a point at the start of a span is dropped when the
-//! distance still decreases into the previous span (the previous span finds it inside).
-//! So a contact sliding across a knot hands over from one pair to the next without
-//! being counted twice or lost.
+//! **Broad phase.** Each segment lies in a ball around its midpoint: the speed of the
+//! curve is bounded on a knot span by the derivative's control points,
+//! \\(|C'| \le V = \max_i d\, |q_i - q_{i-1}| / (t_{i+d} - t_i)\\) (convex-hull property
+//! of the derivative curve), so a segment `[lo, hi]` lies within
+//! \\(\rho = V (hi - lo)/2\\) of \\(C((lo + hi)/2)\\), `V` the largest bound over the spans
+//! it meets. The balls' boxes are sorted along the axis of widest spread and swept; two
+//! segments are candidates when their balls come within the reach `2r + δ` and they are
+//! at least `exclusion` apart along the rod (closer segments are neighbours: their
+//! closest points would be where they join; across a cut too, so the two new ends of a
+//! cut separate freely). Cost O(m log m) for `m` segments, plus the candidates.
+//!
+//! **Sample pairs.** Each segment carries material sample points (midpoint rule, at most
+//! `spacing` apart, with their basis rows cached per basis); the contact energy sums a
+//! penalty over every pair of samples of candidate segments closer than the reach — a
+//! quadrature of the double integral over both strands, so crossing strands and strands
+//! lying alongside each other are treated alike and the energy is as smooth as the
+//! penalty. The samples move with the material, not with the knots, so knot insertion
+//! does not change the energy.
+//!
+//! **Closest points** between candidate segments ([`closest_points_between`], on the
+//! curve) are computed on request only, for reporting distances and for refinement.
 //!
 //! The detection is cached on the positions and the basis epoch: the energy, gradient
-//! and Hessian of one Newton iterate detect once.
+//! and Hessian of one Newton iterate detect once. No allocation once the buffers have
+//! grown.
 
 use nalgebra::Vector3;
-use splinerod_core::basis::Span;
-use splinerod_core::proximity::{closest_points, SpanBoxes};
+use splinerod_core::proximity::closest_points_between;
 use splinerod_core::{BasisValues, CoreError, Real, Rod};
 
-/// One contact: closest points `C(s)` and `C(t)` of two parts of the rod.
+/// Closest points `C(s)` and `C(t)` of two contact segments closer than the reach.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactPoint {
     /// Material coordinate on the first part, m of rest arclength.
@@ -32,22 +44,63 @@ pub struct ContactPoint {
     pub distance: Real,
     /// Unit vector from `C(t)` to `C(s)`.
     pub normal: Vector3<Real>,
-    /// Basis row at `s`.
-    pub(crate) row_s: BasisValues,
-    /// Basis row at `t`.
-    pub(crate) row_t: BasisValues,
 }
 
-/// Buffers and cache of the detection (reused: no allocation once sized).
+/// Two samples closer than the reach: indices, distance and unit vector from `t` to `s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SamplePair {
+    pub a: u32,
+    pub b: u32,
+    pub distance: Real,
+    pub normal: Vector3<Real>,
+}
+
+/// Material sample points with their quadrature weights and cached basis rows.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Samples {
+    pub s: Vec<Real>,
+    pub weight: Vec<Real>,
+    pub first: Vec<u32>,
+    pub values: Vec<Real>,
+    pub order: usize,
+    pub position: Vec<Vector3<Real>>,
+}
+
+impl Samples {
+    /// Basis values of sample `k`, for control points `first[k]..`.
+    pub fn row(&self, k: usize) -> &[Real] {
+        &self.values[k * self.order..(k + 1) * self.order]
+    }
+}
+
+/// A contact segment: its rest-arclength range and bounding ball.
+#[derive(Debug, Clone, Copy, Default)]
+struct Segment {
+    lo: Real,
+    hi: Real,
+    centre: Vector3<Real>,
+    radius: Real,
+    /// Its samples: `samples[first..end]`.
+    first: usize,
+    end: usize,
+}
+
+/// Buffers and cache of the detection.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Detector {
-    boxes: SpanBoxes,
-    pairs: Vec<(usize, usize)>,
-    /// Contacts found by the last detection.
-    pub contacts: Vec<ContactPoint>,
-    /// Candidate pairs of the last detection (broad phase output).
-    pub candidates: usize,
-    cached: Option<(u64, Real, Real)>,
+    segments: Vec<Segment>,
+    order: Vec<usize>,
+    breaks: Vec<Real>,
+    /// The samples of every segment.
+    pub samples: Samples,
+    /// Sample pairs closer than the reach, from the last detection.
+    pub pairs: Vec<SamplePair>,
+    /// Candidate segment pairs of the last detection (broad phase output).
+    candidates: Vec<(u32, u32)>,
+    /// Closest points of touching candidates (filled by [`Detector::closest`]).
+    pub closest: Vec<ContactPoint>,
+    layout: Option<(u64, [Real; 2])>,
+    cached: Option<(u64, [Real; 4])>,
     positions: Vec<Vector3<Real>>,
 }
 
@@ -57,86 +110,237 @@ fn below(x: Real) -> Real {
 }
 
 impl Detector {
-    /// Detects contacts closer than `reach` (m) between points at least `exclusion` (m)
-    /// apart in rest arclength, unless the rod is unchanged since the last call with the
-    /// same settings.
-    pub fn detect(&mut self, rod: &Rod, reach: Real, exclusion: Real) -> Result<(), CoreError> {
-        let key = (rod.topology_epoch(), reach, exclusion);
+    /// Detects sample pairs closer than `reach` (m) on segments of length `segment` (m)
+    /// at least `exclusion` (m) apart along the rod, with samples at most `spacing` (m)
+    /// apart, unless the rod is unchanged since the last call with the same settings.
+    pub fn detect(
+        &mut self,
+        rod: &Rod,
+        reach: Real,
+        exclusion: Real,
+        [segment, spacing]: [Real; 2],
+    ) -> Result<(), CoreError> {
+        let epoch = rod.topology_epoch();
+        let key = (epoch, [reach, exclusion, segment, spacing]);
         if self.cached == Some(key) && self.positions == rod.positions {
             return Ok(());
         }
         self.cached = None;
-        self.contacts.clear();
-        self.boxes.update(rod, 0.5 * reach)?;
-        // Adjacent spans have zero separation: any positive threshold skips just them.
-        let adjacent = 1e-12 * rod.material().rest_length;
-        self.boxes.candidate_pairs(adjacent, &mut self.pairs)?;
-        self.candidates = self.pairs.len();
-        for p in 0..self.pairs.len() {
-            let (i, j) = self.pairs[p];
-            if let Some(contact) = self.narrow(rod, i, j, reach, exclusion)? {
-                self.contacts.push(contact);
-            }
+        if self.layout != Some((epoch, [segment, spacing])) {
+            self.layout = None;
+            self.build_segments(rod, segment, spacing)?;
+            self.layout = Some((epoch, [segment, spacing]));
         }
+        self.bound_segments(rod)?;
+        self.place_samples(rod);
+        self.sweep(reach, exclusion);
+        self.near_samples(reach);
+        self.closest.clear();
         self.positions.clone_from(&rod.positions);
         self.cached = Some(key);
         Ok(())
     }
 
-    /// The contact of spans `i < j`, if their closest points are one.
-    fn narrow(
-        &self,
-        rod: &Rod,
-        i: usize,
-        j: usize,
-        reach: Real,
-        exclusion: Real,
-    ) -> Result<Option<ContactPoint>, CoreError> {
-        let spans = self.boxes.spans();
-        let c = closest_points(rod, &spans[i], &spans[j])?;
-        if c.distance >= reach || (c.t - c.s).abs() < exclusion {
-            return Ok(None);
+    /// Fills [`closest`](Self::closest) with the closest points of every candidate
+    /// segment pair closer than `reach` (after a [`detect`](Self::detect) at this state).
+    pub fn closest(&mut self, rod: &Rod, reach: Real) -> Result<(), CoreError> {
+        self.closest.clear();
+        for &(a, b) in &self.candidates {
+            let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
+            let c = closest_points_between(
+                rod,
+                [sa.lo, below(sa.hi).max(sa.lo)],
+                [sb.lo, below(sb.hi).max(sb.lo)],
+            )?;
+            if c.distance < reach {
+                self.closest.push(ContactPoint {
+                    s: c.s,
+                    t: c.t,
+                    distance: c.distance,
+                    normal: c.normal,
+                });
+            }
         }
-        let r = c.normal * c.distance; // C(s) − C(t)
-        if !self.owns(rod, i, c.s, &r, 1.0)? || !self.owns(rod, j, c.t, &r, -1.0)? {
-            return Ok(None);
-        }
-        let mut row_s = BasisValues::default();
-        let mut row_t = BasisValues::default();
-        rod.basis().evaluate(c.s, &mut row_s)?;
-        rod.basis().evaluate(c.t, &mut row_t)?;
-        Ok(Some(ContactPoint {
-            s: c.s,
-            t: c.t,
-            distance: c.distance,
-            normal: c.normal,
-            row_s,
-            row_t,
-        }))
+        Ok(())
     }
 
-    /// Whether span `k` owns the closest point at `u` (module docs); `sign` is +1 for the
-    /// first parameter (∂f/∂s = r·C′(s)) and −1 for the second (∂f/∂t = −r·C′(t)).
-    fn owns(
-        &self,
-        rod: &Rod,
-        k: usize,
-        u: Real,
-        r: &Vector3<Real>,
-        sign: Real,
-    ) -> Result<bool, CoreError> {
-        let spans = self.boxes.spans();
-        let span: &Span = &spans[k];
-        let continues = |other: usize| self.boxes.piece(other) == self.boxes.piece(k);
-        if u >= below(span.end) && k + 1 < spans.len() && continues(k + 1) {
-            return Ok(false);
+    /// The segments of every piece and their samples with basis rows.
+    fn build_segments(&mut self, rod: &Rod, length: Real, spacing: Real) -> Result<(), CoreError> {
+        self.piece_breaks(rod);
+        self.segments.clear();
+        let samples = &mut self.samples;
+        for v in [&mut samples.s, &mut samples.weight, &mut samples.values] {
+            v.clear();
         }
-        if u <= span.start && k > 0 && continues(k - 1) {
-            let mut left = BasisValues::default();
-            rod.basis().evaluate(below(span.start), &mut left)?;
-            let tangent = left.combine(&left.d1, &rod.positions);
-            return Ok(sign * r.dot(&tangent) <= 0.0);
+        samples.first.clear();
+        samples.order = rod.basis().degree() + 1;
+        let mut row = BasisValues::default();
+        for p in 1..self.breaks.len() {
+            let (start, end) = (self.breaks[p - 1], self.breaks[p]);
+            let count = ((end - start) / length).ceil().max(1.0) as usize;
+            let h = (end - start) / count as Real;
+            for k in 0..count {
+                let lo = start + k as Real * h;
+                let hi = if k + 1 == count { end } else { lo + h };
+                let first = samples.s.len();
+                let m = ((hi - lo) / spacing).ceil().max(1.0) as usize;
+                for j in 0..m {
+                    let s = lo + (j as Real + 0.5) * (hi - lo) / m as Real;
+                    rod.basis().evaluate(s, &mut row)?;
+                    samples.s.push(s);
+                    samples.weight.push((hi - lo) / m as Real);
+                    samples.first.push(row.first as u32);
+                    samples
+                        .values
+                        .extend_from_slice(&row.value[..samples.order]);
+                }
+                self.segments.push(Segment {
+                    lo,
+                    hi,
+                    first,
+                    end: samples.s.len(),
+                    ..Segment::default()
+                });
+            }
         }
-        Ok(true)
+        Ok(())
     }
+
+    /// Sample positions at the rod's current control points.
+    fn place_samples(&mut self, rod: &Rod) {
+        let samples = &mut self.samples;
+        samples.position.clear();
+        for k in 0..samples.s.len() {
+            let first = samples.first[k] as usize;
+            let row = &samples.values[k * samples.order..(k + 1) * samples.order];
+            let p = row
+                .iter()
+                .enumerate()
+                .fold(Vector3::zeros(), |acc, (a, &b)| {
+                    acc + rod.positions[first + a] * b
+                });
+            samples.position.push(p);
+        }
+    }
+
+    /// Sample pairs of the candidate segments closer than `reach`.
+    fn near_samples(&mut self, reach: Real) {
+        self.pairs.clear();
+        let p = &self.samples.position;
+        for &(a, b) in &self.candidates {
+            let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
+            for i in sa.first..sa.end {
+                for j in sb.first..sb.end {
+                    let r = p[i] - p[j];
+                    let distance = r.norm();
+                    if distance < reach {
+                        let normal = r / distance;
+                        self.pairs.push(SamplePair {
+                            a: i as u32,
+                            b: j as u32,
+                            distance,
+                            normal,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    /// The domain's ends and the cuts (knots of multiplicity `d + 1`), in order.
+    fn piece_breaks(&mut self, rod: &Rod) {
+        let d = rod.basis().degree();
+        let (start, end) = rod.basis().domain();
+        let knots = rod.basis().knots();
+        self.breaks.clear();
+        self.breaks.push(start);
+        let mut run = 0;
+        for (i, &t) in knots.iter().enumerate() {
+            run = if i > 0 && knots[i - 1] == t {
+                run + 1
+            } else {
+                1
+            };
+            if run == d + 1 && t > start && t < end {
+                self.breaks.push(t);
+            }
+        }
+        self.breaks.push(end);
+    }
+
+    /// Midpoints and ball radii: the speed bound of every span a segment meets.
+    fn bound_segments(&mut self, rod: &Rod) -> Result<(), CoreError> {
+        let d = rod.basis().degree();
+        let knots = rod.basis().knots();
+        let q = &rod.positions;
+        let mut row = BasisValues::default();
+        let speed = |first: usize| {
+            (first + 1..=first + d)
+                .map(|i| d as Real * (q[i] - q[i - 1]).norm() / (knots[i + d] - knots[i]))
+                .fold(0.0, Real::max)
+        };
+        // Non-empty spans [knots[k], knots[k + 1]], k = first + d, in order.
+        let mut k = d;
+        for seg in &mut self.segments {
+            while knots[k + 1] <= seg.lo {
+                k += 1;
+            }
+            let mut v: Real = 0.0;
+            let mut j = k;
+            while j + 1 < knots.len() && knots[j] < seg.hi {
+                if knots[j + 1] > knots[j] {
+                    v = v.max(speed(j - d));
+                }
+                j += 1;
+            }
+            rod.basis().evaluate(0.5 * (seg.lo + seg.hi), &mut row)?;
+            seg.centre = row.combine(&row.value, q);
+            seg.radius = 0.5 * v * (seg.hi - seg.lo);
+        }
+        Ok(())
+    }
+
+    /// Sort and sweep over the segment balls: candidate segment pairs.
+    fn sweep(&mut self, reach: Real, exclusion: Real) {
+        self.candidates.clear();
+        let axis = widest_axis(&self.segments);
+        let lower = |s: &Segment| s.centre[axis] - s.radius;
+        self.order.clear();
+        self.order.extend(0..self.segments.len());
+        let segments = &self.segments;
+        self.order
+            .sort_unstable_by(|&a, &b| lower(&segments[a]).total_cmp(&lower(&segments[b])));
+        for (a, &i) in self.order.iter().enumerate() {
+            let si = &self.segments[i];
+            let top = si.centre[axis] + si.radius + reach;
+            for &j in &self.order[a + 1..] {
+                let sj = &self.segments[j];
+                if lower(sj) > top {
+                    break;
+                }
+                let (first, second) = if si.lo < sj.lo { (i, j) } else { (j, i) };
+                let gap = self.segments[second].lo - self.segments[first].hi;
+                let apart = (si.centre - sj.centre).norm() - si.radius - sj.radius;
+                if apart < reach && gap >= exclusion {
+                    self.candidates.push((first as u32, second as u32));
+                }
+            }
+        }
+    }
+
+    /// Number of candidate segment pairs of the last detection.
+    pub fn candidate_count(&self) -> usize {
+        self.candidates.len()
+    }
+}
+
+/// The coordinate axis along which the segment centres spread most.
+fn widest_axis(segments: &[Segment]) -> usize {
+    let mut lo = Vector3::repeat(Real::INFINITY);
+    let mut hi = Vector3::repeat(Real::NEG_INFINITY);
+    for s in segments {
+        lo = lo.inf(&s.centre);
+        hi = hi.sup(&s.centre);
+    }
+    (hi - lo).imax()
 }
