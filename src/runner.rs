@@ -1,6 +1,7 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
+use crate::knot_track::KnotTrack;
 use crate::observe::{Frame, Observer};
 use crate::scene::{MemberSummary, Method, Scene};
 use crate::{Error, RodSystem, StepReport};
@@ -104,6 +105,9 @@ pub struct RunResult {
     /// Contact statistics (absent without `[contact]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactStats>,
+    /// Tightness of the knot over time (scenes with `[rod.overhand]` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub knot: Option<KnotTrack>,
 }
 
 /// What a run accumulated besides the final state.
@@ -117,6 +121,7 @@ pub(crate) struct Tally {
     pub(crate) history: Vec<[Real; 2]>,
     pub(crate) step_seconds: Vec<Real>,
     pub(crate) contact: Option<ContactStats>,
+    pub(crate) knot: Option<KnotTrack>,
 }
 
 impl Tally {
@@ -131,6 +136,7 @@ impl Tally {
             history: vec![[0.0, system.rod.len() as Real]],
             step_seconds: Vec::new(),
             contact: None,
+            knot: None,
         }
     }
 
@@ -270,6 +276,11 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
     let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
     let mut cuts = CutSchedule::new(scene);
     tally.contact(&sim.system)?;
+    if scene.rod.overhand.is_some() {
+        let mut track = KnotTrack::default();
+        track.record(&sim.system, 0.0, true)?;
+        tally.knot = Some(track);
+    }
     let radius = scene.rod.radius.unwrap_or_default();
     for o in observers.iter_mut() {
         o.start(&frame(scene, &sim.system, 0.0, 0))?;
@@ -279,6 +290,9 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
         let step_start = Instant::now();
         let report = sim.step(dt)?;
         tally.add_step(&report, radius);
+        if let Some(track) = &mut tally.knot {
+            track.record(&sim.system, sim.time, false)?;
+        }
         cuts.apply(sim.time, dt, |s| sim.cut(s))?;
         let wall = step_start.elapsed().as_secs_f64();
         tally.step_seconds.push(wall);
@@ -290,6 +304,9 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
         }
     }
     tally.wall = start.elapsed().as_secs_f64();
+    if let Some(track) = &mut tally.knot {
+        track.record(&sim.system, sim.time, true)?;
+    }
     (tally.time, tally.steps) = (sim.time, sim.steps);
     tally.pin_forces = sim.integrator.pin_forces();
     let result = finish(scene, &sim.system, tally)?;
@@ -347,6 +364,7 @@ pub(crate) fn finish(
         median_step_seconds: median(&mut tally.step_seconds),
         ensemble: Vec::new(),
         contact: tally.contact,
+        knot: tally.knot,
     })
 }
 
@@ -423,6 +441,13 @@ impl RunResult {
         }
         if self.pieces > 1 {
             out.push_str(&format!("{} pieces after cutting\n", self.pieces));
+        }
+        if let Some(k) = &self.knot {
+            let last = k.knot_length.last().copied().flatten();
+            let first = k.knot_length.first().copied().flatten();
+            if let (Some(a), Some(b)) = (first, last) {
+                out.push_str(&format!("knot length: {a:.4} m -> {b:.4} m of rod\n"));
+            }
         }
         if let Some(c) = &self.contact {
             let ratio = c

@@ -33,6 +33,7 @@
 //! \\(\pi r\\), the default), which ignores loops shorter than `exclusion + 2 segment`
 //! (about `7.3 r` by default: a loop of radius 1.2 r, tighter than the rod allows).
 
+mod assemble;
 pub mod detect;
 mod penalty;
 
@@ -308,21 +309,32 @@ impl Energy for Contact {
     }
 
     fn add_hessian(&self, rod: &Rod, _kind: HessianKind, hessian: &mut BlockBanded) {
-        let Ok(d) = self.detected(rod) else {
+        let Ok(mut d) = self.detected(rod) else {
             hessian.scale(Real::NAN);
             return;
         };
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
-        for c in &d.pairs {
-            let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(c));
-            let nn = c.normal * c.normal.transpose() * stiffness;
-            let len = pair_rows(&d, c, &mut weights);
-            for (a, &(i, wi)) in weights[..len].iter().enumerate() {
-                for &(j, wj) in &weights[a..len] {
-                    hessian.add_coupling(i, j, &(nn * (wi * wj)));
-                }
+        let mut local = std::mem::take(&mut d.group_hessian);
+        for &(start, end) in &d.groups {
+            let pairs = &d.pairs[start..end];
+            let order = d.samples.order;
+            let first = |k: u32| d.samples.first[k as usize] as usize;
+            local.start(
+                pairs
+                    .iter()
+                    .flat_map(|c| (0..order).flat_map(move |k| [first(c.a) + k, first(c.b) + k])),
+            );
+            for c in pairs {
+                let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(c));
+                let len = pair_rows(&d, c, &mut weights);
+                local.add(
+                    &weights[..len],
+                    &(c.normal * c.normal.transpose() * stiffness),
+                );
             }
+            local.finish(hessian);
         }
+        d.group_hessian = local;
         drop(d);
         let nn: Matrix3<Real> = self
             .params

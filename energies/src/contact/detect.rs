@@ -3,13 +3,13 @@
 //! the knots, so the segments — and the contact energy — do not change when knots are
 //! inserted or removed.
 //!
-//! **Broad phase.** Each segment lies in a ball around its midpoint: the speed of the
-//! curve is bounded on a knot span by the derivative's control points,
+//! **Broad phase.** Each segment lies in a box: the speed of the curve is bounded on a
+//! knot span by the derivative's control points,
 //! \\(|C'| \le V = \max_i d\, |q_i - q_{i-1}| / (t_{i+d} - t_i)\\) (convex-hull property
-//! of the derivative curve), so a segment `[lo, hi]` lies within
-//! \\(\rho = V (hi - lo)/2\\) of \\(C((lo + hi)/2)\\), `V` the largest bound over the spans
-//! it meets. The balls' boxes are sorted along the axis of widest spread and swept; two
-//! segments are candidates when their balls come within the reach `2r + δ` and they are
+//! of the derivative curve), so with samples `h` apart the segment lies within `V h/2`
+//! of its samples: the box of its samples widened by that. The boxes are sorted along
+//! the axis of widest spread and swept; two segments are candidates when their boxes
+//! come within the reach `2r + δ` on every axis and they are
 //! at least `exclusion` apart along the rod (closer segments are neighbours: their
 //! closest points would be where they join; across a cut too, so the two new ends of a
 //! cut separate freely). Cost O(m log m) for `m` segments, plus the candidates.
@@ -29,6 +29,7 @@
 //! and Hessian of one Newton iterate detect once. No allocation once the buffers have
 //! grown.
 
+use super::assemble::GroupHessian;
 use nalgebra::Vector3;
 use splinerod_core::proximity::closest_points_between;
 use splinerod_core::{BasisValues, CoreError, Real, Rod};
@@ -78,8 +79,10 @@ impl Samples {
 struct Segment {
     lo: Real,
     hi: Real,
-    centre: Vector3<Real>,
-    radius: Real,
+    /// Box of the segment's curve: its samples' box widened by half the speed bound
+    /// times the sample spacing.
+    lower: Vector3<Real>,
+    upper: Vector3<Real>,
     /// Its samples: `samples[first..end]`.
     first: usize,
     end: usize,
@@ -95,10 +98,15 @@ pub(crate) struct Detector {
     pub samples: Samples,
     /// Sample pairs closer than the reach, from the last detection.
     pub pairs: Vec<SamplePair>,
+    /// `pairs[start..end]` of each candidate segment pair with touching samples.
+    pub groups: Vec<(usize, usize)>,
+    /// Scratch for assembling one group's Hessian.
+    pub group_hessian: GroupHessian,
     /// Candidate segment pairs of the last detection (broad phase output).
     candidates: Vec<(u32, u32)>,
     /// Closest points of touching candidates (filled by [`Detector::closest`]).
     pub closest: Vec<ContactPoint>,
+    closest_done: bool,
     layout: Option<(u64, [Real; 2])>,
     cached: Option<(u64, [Real; 4])>,
     positions: Vec<Vector3<Real>>,
@@ -131,11 +139,12 @@ impl Detector {
             self.build_segments(rod, segment, spacing)?;
             self.layout = Some((epoch, [segment, spacing]));
         }
-        self.bound_segments(rod)?;
         self.place_samples(rod);
+        self.bound_segments(rod);
         self.sweep(reach, exclusion);
         self.near_samples(reach);
         self.closest.clear();
+        self.closest_done = false;
         self.positions.clone_from(&rod.positions);
         self.cached = Some(key);
         Ok(())
@@ -144,6 +153,9 @@ impl Detector {
     /// Fills [`closest`](Self::closest) with the closest points of every candidate
     /// segment pair closer than `reach` (after a [`detect`](Self::detect) at this state).
     pub fn closest(&mut self, rod: &Rod, reach: Real) -> Result<(), CoreError> {
+        if self.closest_done {
+            return Ok(());
+        }
         self.closest.clear();
         for &(a, b) in &self.candidates {
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
@@ -161,6 +173,7 @@ impl Detector {
                 });
             }
         }
+        self.closest_done = true;
         Ok(())
     }
 
@@ -226,8 +239,10 @@ impl Detector {
     /// Sample pairs of the candidate segments closer than `reach`.
     fn near_samples(&mut self, reach: Real) {
         self.pairs.clear();
+        self.groups.clear();
         let p = &self.samples.position;
         for &(a, b) in &self.candidates {
+            let start = self.pairs.len();
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
             for i in sa.first..sa.end {
                 for j in sb.first..sb.end {
@@ -243,6 +258,9 @@ impl Detector {
                         });
                     }
                 }
+            }
+            if self.pairs.len() > start {
+                self.groups.push((start, self.pairs.len()));
             }
         }
     }
@@ -268,12 +286,13 @@ impl Detector {
         self.breaks.push(end);
     }
 
-    /// Midpoints and ball radii: the speed bound of every span a segment meets.
-    fn bound_segments(&mut self, rod: &Rod) -> Result<(), CoreError> {
+    /// Boxes of the segments: the box of the samples widened by `V h / 2`, `V` the speed
+    /// bound of the spans the segment meets and `h` its sample spacing (the curve between
+    /// two samples, or between an end and its sample, stays that close to a sample).
+    fn bound_segments(&mut self, rod: &Rod) {
         let d = rod.basis().degree();
         let knots = rod.basis().knots();
         let q = &rod.positions;
-        let mut row = BasisValues::default();
         let speed = |first: usize| {
             (first + 1..=first + d)
                 .map(|i| d as Real * (q[i] - q[i - 1]).norm() / (knots[i + d] - knots[i]))
@@ -281,6 +300,7 @@ impl Detector {
         };
         // Non-empty spans [knots[k], knots[k + 1]], k = first + d, in order.
         let mut k = d;
+        let p = &self.samples.position;
         for seg in &mut self.segments {
             while knots[k + 1] <= seg.lo {
                 k += 1;
@@ -293,35 +313,43 @@ impl Detector {
                 }
                 j += 1;
             }
-            rod.basis().evaluate(0.5 * (seg.lo + seg.hi), &mut row)?;
-            seg.centre = row.combine(&row.value, q);
-            seg.radius = 0.5 * v * (seg.hi - seg.lo);
+            let h = (seg.hi - seg.lo) / (seg.end - seg.first) as Real;
+            let widen = Vector3::repeat(0.5 * v * h);
+            let (lo, hi) = p[seg.first..seg.end].iter().fold(
+                (
+                    Vector3::repeat(Real::INFINITY),
+                    Vector3::repeat(Real::NEG_INFINITY),
+                ),
+                |(lo, hi), x| (lo.inf(x), hi.sup(x)),
+            );
+            (seg.lower, seg.upper) = (lo - widen, hi + widen);
         }
-        Ok(())
     }
 
-    /// Sort and sweep over the segment balls: candidate segment pairs.
+    /// Sort and sweep over the segment boxes: candidate segment pairs, boxes closer
+    /// than `reach` on every axis and segments at least `exclusion` apart along the rod.
     fn sweep(&mut self, reach: Real, exclusion: Real) {
         self.candidates.clear();
         let axis = widest_axis(&self.segments);
-        let lower = |s: &Segment| s.centre[axis] - s.radius;
         self.order.clear();
         self.order.extend(0..self.segments.len());
         let segments = &self.segments;
         self.order
-            .sort_unstable_by(|&a, &b| lower(&segments[a]).total_cmp(&lower(&segments[b])));
+            .sort_unstable_by(|&a, &b| segments[a].lower[axis].total_cmp(&segments[b].lower[axis]));
         for (a, &i) in self.order.iter().enumerate() {
             let si = &self.segments[i];
-            let top = si.centre[axis] + si.radius + reach;
+            let top = si.upper[axis] + reach;
             for &j in &self.order[a + 1..] {
                 let sj = &self.segments[j];
-                if lower(sj) > top {
+                if sj.lower[axis] > top {
                     break;
                 }
                 let (first, second) = if si.lo < sj.lo { (i, j) } else { (j, i) };
                 let gap = self.segments[second].lo - self.segments[first].hi;
-                let apart = (si.centre - sj.centre).norm() - si.radius - sj.radius;
-                if apart < reach && gap >= exclusion {
+                let near = (0..3).all(|k| {
+                    sj.lower[k] <= si.upper[k] + reach && si.lower[k] <= sj.upper[k] + reach
+                });
+                if near && gap >= exclusion {
                     self.candidates.push((first as u32, second as u32));
                 }
             }
@@ -334,13 +362,13 @@ impl Detector {
     }
 }
 
-/// The coordinate axis along which the segment centres spread most.
+/// The coordinate axis along which the segment boxes spread most.
 fn widest_axis(segments: &[Segment]) -> usize {
     let mut lo = Vector3::repeat(Real::INFINITY);
     let mut hi = Vector3::repeat(Real::NEG_INFINITY);
     for s in segments {
-        lo = lo.inf(&s.centre);
-        hi = hi.sup(&s.centre);
+        lo = lo.inf(&s.lower);
+        hi = hi.sup(&s.lower);
     }
     (hi - lo).imax()
 }
