@@ -148,6 +148,7 @@ impl Scene {
             tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
             line_search: self.solver.line_search,
             linear_solver: self.linear_solver(),
+            max_step: self.solver.max_step,
         }
     }
 

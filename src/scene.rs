@@ -202,6 +202,8 @@ pub struct SolverSpec {
     /// `"banded"` (default) or `"sparse"` (faer): the factorisation of Newton matrices.
     #[serde(default)]
     pub linear_solver: LinearSolverSpec,
+    /// Largest move of a material point per Newton iteration, m (> 0). Default: no limit.
+    pub max_step: Option<f64>,
 }
 
 /// `solver.linear_solver`.
@@ -463,6 +465,9 @@ impl Scene {
                     positive(name, v)?;
                 }
             }
+        }
+        if let Some(m) = s.max_step {
+            positive("solver.max_step", m)?;
         }
         if s.newton_iterations == Some(0) {
             return Err(Error::field(

@@ -74,3 +74,31 @@ fn public_types_are_send_and_sync() {
     check::<Box<dyn Integrator>>();
     check::<Box<dyn BasisSpace>>();
 }
+
+/// `solver.max_step` shortens Newton steps (more iterations) but solves the same
+/// equations: a step of the plucked string (a convex incremental potential) ends where
+/// the unlimited one does.
+#[test]
+fn a_newton_step_limit_takes_more_iterations_to_the_same_solution() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/string_modes.toml"
+    ))
+    .unwrap()
+    .replace("dt = 0.001", "dt = 0.005\nnewton_iterations = 400");
+    let free = Scene::from_toml(&text).unwrap();
+    let limited = Scene::from_toml(&text.replace("duration", "max_step = 1e-4\nduration")).unwrap();
+    assert_eq!(limited.solver.max_step, Some(1e-4));
+    let (mut a, mut b) = (free.build().unwrap(), limited.build().unwrap());
+    let (ra, rb) = (a.step(0.005).unwrap(), b.step(0.005).unwrap());
+    assert!(ra.solver.converged && rb.solver.converged, "{ra:?} {rb:?}");
+    assert!(rb.solver.newton_iterations >= 5, "{rb:?}");
+    assert!(ra.solver.newton_iterations < rb.solver.newton_iterations);
+    let gap = (a.system.rod.positions.iter())
+        .zip(&b.system.rod.positions)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0, Real::max);
+    assert!(gap < 1e-9, "{gap}");
+    let bad = Scene::from_toml(&text.replace("duration", "max_step = -1.0\nduration"));
+    assert!(bad.unwrap_err().to_string().contains("solver.max_step"));
+}

@@ -6,7 +6,8 @@
 //! pins \\(G x = c\\). Each iteration assembles `r` and `A`, factorises `A` (numeric
 //! only, unless the basis or the far block pattern changed; far blocks select the sparse
 //! path, see [`crate::linear`]), solves the KKT system by a Schur complement
-//! (the private `kkt` module), and takes the step, halving it while the Armijo condition
+//! (the private `kkt` module), and takes the step — first shortened to
+//! [`NewtonParams::max_step`] if longer — halving it while the Armijo condition
 //! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails.
 //! It stops when the step moves no material point by more than
 //! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
@@ -35,6 +36,11 @@ pub struct NewtonParams {
     pub line_search: bool,
     /// The factorisation of the Newton matrix. Default banded.
     pub linear_solver: LinearSolverKind,
+    /// Largest move of a material point in one Newton iteration, m; a longer step is
+    /// shortened to it (along the same direction) before the line search, so that the
+    /// iterates follow the path of the step instead of jumping (e.g. over a contact).
+    /// Default `None` (no limit).
+    pub max_step: Option<Real>,
 }
 
 impl Default for NewtonParams {
@@ -44,6 +50,7 @@ impl Default for NewtonParams {
             tolerance: 1e-10,
             line_search: true,
             linear_solver: LinearSolverKind::Banded,
+            max_step: None,
         }
     }
 }
@@ -58,7 +65,11 @@ impl NewtonParams {
                 reason: "must be at least 1",
             });
         }
-        crate::error::positive("tolerance", self.tolerance)
+        crate::error::positive("tolerance", self.tolerance)?;
+        match self.max_step {
+            Some(limit) => crate::error::positive("max_step", limit),
+            None => Ok(()),
+        }
     }
 }
 
@@ -151,10 +162,14 @@ pub fn solve(
         problem.residual(system, &mut ws.r);
         newton_direction(problem, system, x, ws, &mut stats)?;
         // A step already below the tolerance is taken whole: its merit change is rounding.
-        let full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
+        let mut full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
         let limit = DIVERGENCE_LENGTHS * system.rod().material().rest_length;
         if full > limit {
             return Err(IntegratorError::Diverged { step: full, limit });
+        }
+        if let Some(cap) = params.max_step.filter(|&cap| full > cap) {
+            ws.dx.iter_mut().for_each(|d| *d *= cap / full);
+            full = cap;
         }
         let search = params.line_search && full > tolerance;
         let t = line_search(problem, system, x, ws, search, &mut stats)?;

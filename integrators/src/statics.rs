@@ -105,6 +105,7 @@ fn newton_params(p: &StaticParams) -> NewtonParams {
         tolerance: p.tolerance,
         line_search: true,
         linear_solver: p.linear_solver,
+        max_step: None,
     }
 }
 
