@@ -129,4 +129,9 @@ impl System for RodSystem {
             e.add_hessian(&self.rod, kind, hessian);
         }
     }
+    fn admissible(&self) -> bool {
+        self.contact
+            .as_ref()
+            .is_none_or(|c| c.admissible(&self.rod))
+    }
 }

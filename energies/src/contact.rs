@@ -208,6 +208,18 @@ impl Contact {
         })
     }
 
+    /// Whether no two material samples are closer than `r` (half the diameter): the
+    /// states Newton's line search may move to (`System::admissible`). With a Newton
+    /// step limit below `r/2`, strands cannot pass through each other between iterates,
+    /// however long the time step. A failed detection is not admissible.
+    pub fn admissible(&self, rod: &Rod) -> bool {
+        let Ok(d) = self.detected(rod) else {
+            return false;
+        };
+        let floor = self.params.radius;
+        d.pairs.iter().all(|p| p.distance >= floor)
+    }
+
     /// Appends the material coordinates of both sides of every contact (for the
     /// interaction refinement criterion).
     pub fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {

@@ -167,6 +167,13 @@ impl Stepper {
         step: Increment,
     ) -> Result<StepStats, IntegratorError> {
         self.beta = step.beta;
+        if params.max_step.is_some() && step.beta > 0.0 {
+            // Start from the current positions (not the predictor x = v₀), so that the
+            // step limit governs the whole path from the start state.
+            for ((x, q0), b) in self.x.iter_mut().zip(&self.q0).zip(&self.base_q) {
+                *x = (q0 - b) / step.beta;
+            }
+        }
         let mut problem = IncrementalProblem {
             base_q: &self.base_q,
             base_v: &self.base_v,

@@ -69,6 +69,12 @@ pub trait System: Send + Sync {
     fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]);
     /// Adds the Hessian of the potential energy (see [`HessianKind`]).
     fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded);
+    /// Whether the current state is one Newton's line search may move to, from a state
+    /// that is: a penalty is a finite barrier, and with long time steps the line search
+    /// could otherwise accept strands passing through each other. Default: always.
+    fn admissible(&self) -> bool {
+        true
+    }
 }
 
 /// Counters of one step or solve, for statistics and regression snapshots.

@@ -256,6 +256,8 @@ fn line_search(
     });
     let search = enabled && feasible && slope < 0.0;
     let phi0 = if search { problem.merit(system) } else { 0.0 };
+    // An admissible iterate stays admissible (System::admissible).
+    let guard = search && system.admissible();
     ws.base.copy_from_slice(x);
     let mut t: Real = 1.0;
     loop {
@@ -267,9 +269,19 @@ fn line_search(
             return Ok(t);
         }
         let phi = problem.merit(system);
-        let armijo = phi <= phi0 + 1e-4 * t * slope;
-        let noise = (phi - phi0).abs() <= 1e-14 * phi0.abs();
+        let admissible = !guard || system.admissible();
+        let armijo = admissible && phi <= phi0 + 1e-4 * t * slope;
+        let noise = admissible && (phi - phi0).abs() <= 1e-14 * phi0.abs();
         if armijo || noise || t < 1e-8 {
+            if !admissible {
+                // No admissible point along the step: stay where we are.
+                t = 0.0;
+                for (xi, b) in x.iter_mut().zip(&ws.base) {
+                    *xi = *b;
+                }
+                problem.apply(system.rod_mut(), x);
+                return Ok(t);
+            }
             if !phi.is_finite() {
                 return Err(IntegratorError::NonFinite { what: "merit" });
             }
