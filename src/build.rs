@@ -75,7 +75,10 @@ impl Scene {
         let ea = self.rod.stretch_stiffness;
         let stretching = match self.rod.rest_shape {
             RestShape::Arclength => Stretching::new(ea)?,
-            RestShape::Initial => Stretching::with_rest_shape(ea, &rod)?,
+            RestShape::Initial => Stretching::with_rest_shape(ea, &rod).map_err(|e| {
+                let reason = format!("the initial curve cannot be the rest shape: {e}");
+                Error::field("rod.rest_shape", "\"initial\"", reason)
+            })?,
         };
         let mut system = RodSystem::new(rod).with_energy(stretching);
         if let Some(ei) = self.rod.bending_stiffness {

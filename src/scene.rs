@@ -46,9 +46,12 @@ pub struct Scene {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RodSpec {
-    /// Rest length `L`, m (> 0). Required, except with `overhand`, which sets it.
-    #[serde(default = "missing")]
+    /// Rest length `L`, m (> 0): as given, or set by `overhand` ([`Scene::resolve_shape`]).
+    #[serde(skip)]
     pub rest_length: f64,
+    /// `rest_length` as written in the file (required unless `overhand` is given).
+    #[serde(rename = "rest_length")]
+    pub given_rest_length: Option<f64>,
     /// Mass per unit rest length, kg/m (> 0).
     pub linear_density: f64,
     /// Axial stiffness `EA = Y·r`, N (> 0).
@@ -106,14 +109,6 @@ pub struct OverhandShape {
 
 fn default_degree() -> usize {
     3
-}
-
-/// Marks a missing `rod.rest_length` (only `rod.overhand` may fill it in): a value no
-/// scene uses, distinct from any NaN or infinity a scene might give.
-const MISSING_LENGTH: f64 = f64::MIN;
-
-fn missing() -> f64 {
-    MISSING_LENGTH
 }
 
 /// `rod.knots`: a named layout or an explicit vector.
@@ -268,21 +263,22 @@ impl Scene {
         })
     }
 
-    /// Fills in `rod.rest_length` and `rod.initial_control_points` from `rod.overhand`;
-    /// errors if the scene also gives them, or if `rest_length` is missing without it.
+    /// Sets `rod.rest_length` from the file, or it and `rod.initial_control_points` from
+    /// `rod.overhand`; errors if the scene gives both, or neither.
     pub fn resolve_shape(&mut self) -> Result<(), Error> {
         let r = &mut self.rod;
         let Some(shape) = r.overhand else {
-            if r.rest_length == MISSING_LENGTH {
+            let Some(length) = r.given_rest_length else {
                 return Err(Error::Scene(
                     "missing field `rod.rest_length` (required unless rod.overhand gives the shape)"
                         .into(),
                 ));
-            }
+            };
+            r.rest_length = length;
             return Ok(());
         };
         let given = [
-            ("rod.rest_length", r.rest_length != MISSING_LENGTH),
+            ("rod.rest_length", r.given_rest_length.is_some()),
             (
                 "rod.initial_control_points",
                 r.initial_control_points.is_some(),
@@ -307,7 +303,10 @@ impl Scene {
                 value,
                 reason,
             } => Error::InvalidField {
-                field: format!("rod.overhand.{field}"),
+                field: match field.as_str() {
+                    "control_points" | "degree" => format!("rod.{field}"),
+                    _ => format!("rod.overhand.{field}"),
+                },
                 value,
                 reason,
             },
@@ -377,10 +376,20 @@ impl Scene {
                 return Err(Error::field("ensemble.count", e.count, reason));
             }
         }
+        if let Some(radius) = self.rod.radius {
+            positive("rod.radius", radius)?;
+            // Contact samples the rod every 0.2 r: keep their number sane.
+            let samples = self.rod.rest_length / (0.2 * radius);
+            if samples > 1e7 {
+                let reason = format!(
+                    "too thin for a rod of length {} m: contact would need {samples:.1e} samples (at most 1e7)",
+                    self.rod.rest_length
+                );
+                return Err(Error::field("rod.radius", radius, reason));
+            }
+        }
         if let Some(c) = &self.contact {
             c.validate(self.rod.radius)?;
-        } else if let Some(r) = self.rod.radius {
-            positive("rod.radius", r)?;
         }
         crate::scene_adapt::validate(
             self.adaptivity.as_ref(),

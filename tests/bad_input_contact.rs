@@ -1,0 +1,557 @@
+//! Bad input in the contact-era scene fields (`rod.radius`, `rod.rest_shape`,
+//! `[rod.overhand]` and `[contact]`): one clear error naming the field and the value,
+//! never a panic; through the library (`Scene::from_toml`, `Scene::build_system`) and
+//! through the `splinerod` command line (exit code 2).
+
+use splinerod::knot::OverhandSpec;
+use splinerod::Scene;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A valid straight rod with a radius and contact against a floor; every test alters it
+/// by one small substitution.
+const BASE: &str = r#"[rod]
+rest_length = 1.0
+linear_density = 0.1
+stretch_stiffness = 100.0
+control_points = 8
+start = [0.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.0]
+radius = 0.01
+
+[[pins]]
+at = 0.0
+
+[contact]
+stiffness = 1e5
+floor = -0.4
+
+[solver]
+method = "implicit-euler"
+dt = 0.01
+duration = 0.05
+"#;
+
+/// A valid rod with a preformed overhand knot (as `scenes/knot_tying.toml`).
+const KNOT: &str = r#"[rod]
+linear_density = 0.01
+stretch_stiffness = 100.0
+control_points = 11
+radius = 0.003
+rest_shape = "initial"
+
+[rod.overhand]
+size = 0.15
+span = 0.5
+
+[[pins]]
+at = 0.0
+
+[contact]
+stiffness = 1e4
+
+[solver]
+method = "implicit-euler"
+dt = 0.001
+duration = 0.01
+"#;
+
+/// The line of `text` that sets `key`; there must be exactly one.
+fn line_of<'a>(text: &'a str, key: &str) -> &'a str {
+    let prefix = format!("{key} = ");
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with(&prefix)).collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "`{key}` must be set exactly once in the base"
+    );
+    lines[0]
+}
+
+/// `text` with the value of `key` replaced by `value` (TOML syntax).
+fn set_in(text: &str, key: &str, value: &str) -> String {
+    text.replacen(line_of(text, key), &format!("{key} = {value}"), 1)
+}
+
+/// `text` without the line that sets `key`.
+fn without_in(text: &str, key: &str) -> String {
+    text.replacen(&format!("{}\n", line_of(text, key)), "", 1)
+}
+
+/// `text` with `line` added after the header `table`.
+fn with_line_in(text: &str, table: &str, line: &str) -> String {
+    assert!(text.contains(table), "no {table} in the base");
+    text.replacen(table, &format!("{table}\n{line}"), 1)
+}
+
+/// `text` with the `[contact]` table (header and body, up to the next table) removed.
+fn without_contact(text: &str) -> String {
+    let start = text.find("[contact]\n").expect("a [contact] table");
+    let end = start
+        + text[start..]
+            .find("\n\n")
+            .expect("a blank line after [contact]")
+        + 2;
+    format!("{}{}", &text[..start], &text[end..])
+}
+
+/// Parses, validates and builds `text`, which must fail without panicking; the error.
+fn rejected(text: &str) -> String {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        Scene::from_toml(text).and_then(|scene| scene.build_system().map(|_| ()))
+    }));
+    match outcome {
+        Ok(Err(e)) => e.to_string(),
+        Ok(Ok(())) => panic!("scene accepted:\n{text}"),
+        Err(_) => panic!("scene panicked instead of failing:\n{text}"),
+    }
+}
+
+/// Parses, validates and builds `text`, which must pass.
+fn accepted(text: &str) -> Scene {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        let scene = Scene::from_toml(text)?;
+        scene.build_system()?;
+        Ok::<_, splinerod::Error>(scene)
+    }));
+    match outcome {
+        Ok(Ok(scene)) => scene,
+        Ok(Err(e)) => panic!("scene rejected: {e}\n{text}"),
+        Err(_) => panic!("scene panicked:\n{text}"),
+    }
+}
+
+fn assert_field(message: &str, field: &str) {
+    assert!(message.contains(field), "`{field}` not named in: {message}");
+}
+
+/// `message` names `field` followed by `value` (as Rust displays it).
+fn assert_field_value(message: &str, field: &str, value: &str) {
+    assert_field(message, field);
+    let after = message.split_once(field).unwrap().1;
+    let after = after.trim_start_matches(['`', ' ', '=']);
+    assert!(
+        after.starts_with(value),
+        "`{field}` not followed by {value} in: {message}"
+    );
+}
+
+/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
+fn shown(value: &str) -> String {
+    value.parse::<f64>().unwrap().to_string()
+}
+
+/// Negative, zero and non-finite values of `key` in `text` are rejected naming `field`
+/// and the value.
+fn assert_needs_positive(text: &str, key: &str, field: &str) {
+    for value in ["-2.5", "-1.0", "0.0", "nan", "inf", "-inf"] {
+        let message = rejected(&set_in(text, key, value));
+        assert_field_value(&message, field, &shown(value));
+    }
+}
+
+// ---------------------------------------------------------------- valid scenes
+
+#[test]
+fn bases_are_valid() {
+    let scene = accepted(BASE);
+    assert_eq!(scene.rod.radius, Some(0.01));
+    assert!(scene.build_system().unwrap().contact.is_some());
+    let knot = accepted(KNOT);
+    assert!(knot.rod.rest_length > 0.5, "{}", knot.rod.rest_length);
+    assert_eq!(knot.rod.initial_control_points.as_ref().unwrap().len(), 11);
+}
+
+#[test]
+fn bundled_contact_scenes_parse_and_build() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for name in [
+        "knot_tying.toml",
+        "knot_tying_adaptive.toml",
+        "cut_contact.toml",
+    ] {
+        let path = dir.join(name);
+        let scene = Scene::load(&path).unwrap_or_err(name);
+        assert!(scene.rod.radius.is_some_and(|r| r > 0.0), "{name}");
+        let contact = scene.contact.as_ref().expect(name);
+        assert!(contact.enabled, "{name}");
+        let system = scene.build_system().unwrap_or_err(name);
+        assert!(system.contact.is_some(), "{name}: contact not built");
+    }
+}
+
+/// `expect` that shows the error with its `Display` (the one users see).
+trait UnwrapOrErr<T> {
+    fn unwrap_or_err(self, what: &str) -> T;
+}
+
+impl<T> UnwrapOrErr<T> for Result<T, splinerod::Error> {
+    fn unwrap_or_err(self, what: &str) -> T {
+        self.unwrap_or_else(|e| panic!("{what}: {e}"))
+    }
+}
+
+#[test]
+fn disabled_contact_needs_no_radius() {
+    let text = with_line_in(&without_in(BASE, "radius"), "[contact]", "enabled = false");
+    let scene = accepted(&text);
+    assert!(!scene.contact.as_ref().unwrap().enabled);
+    assert!(scene.build_system().unwrap().contact.is_none());
+    // No `[contact]` at all: the radius is optional and has no other effect.
+    accepted(&without_contact(&without_in(BASE, "radius")));
+    accepted(&without_contact(BASE));
+}
+
+#[test]
+fn defaults_and_edge_values_are_accepted() {
+    for (key, value) in [
+        ("floor", "0.0"),
+        ("floor", "-1e3"),
+        ("floor", "1.5"),
+        ("stiffness", "1e-3"),
+    ] {
+        accepted(&set_in(BASE, key, value));
+    }
+    for line in [
+        "friction = 0.0",
+        "exclusion = 0.0",
+        "exclusion = 0.5",
+        "onset = 1e-4",
+        "enabled = true",
+    ] {
+        accepted(&with_line_in(BASE, "[contact]", line));
+    }
+    for shape in ["\"arclength\"", "\"initial\""] {
+        let scene = accepted(&with_line_in(
+            BASE,
+            "[rod]",
+            &format!("rest_shape = {shape}"),
+        ));
+        assert_eq!(scene.rod.rest_length, 1.0);
+    }
+}
+
+// ---------------------------------------------------------------- rod.radius
+
+#[test]
+fn bad_radius() {
+    assert_needs_positive(BASE, "radius", "rod.radius");
+    // Also without contact: the radius is range-checked on its own.
+    assert_needs_positive(&without_contact(BASE), "radius", "rod.radius");
+}
+
+/// `rod.radius` is range-checked whether or not contact uses it (README: finite, > 0),
+/// also when the `[contact]` table is present but disabled.
+#[test]
+fn bad_radius_with_disabled_contact() {
+    let disabled = with_line_in(BASE, "[contact]", "enabled = false");
+    for value in ["0.0", "-1.0", "nan"] {
+        let text = set_in(&disabled, "radius", value);
+        let outcome = catch_unwind(AssertUnwindSafe(|| Scene::from_toml(&text)));
+        match outcome {
+            Err(_) => panic!("radius = {value} with contact disabled panicked"),
+            Ok(Ok(_)) => panic!(
+                "rod.radius = {value} is accepted when [contact] has enabled = false \
+                 (Scene::validate checks rod.radius only when there is no [contact] table, \
+                 and ContactSpec::validate returns early when disabled)"
+            ),
+            Ok(Err(e)) => assert_field_value(&e.to_string(), "rod.radius", &shown(value)),
+        }
+    }
+}
+
+#[test]
+fn contact_without_radius() {
+    let message = rejected(&without_in(BASE, "radius"));
+    assert_field(&message, "rod.radius");
+    assert_field(&message, "contact");
+    let explicit = with_line_in(&without_in(BASE, "radius"), "[contact]", "enabled = true");
+    assert_field(&rejected(&explicit), "rod.radius");
+}
+
+// ---------------------------------------------------------------- [contact]
+
+#[test]
+fn bad_stiffness() {
+    assert_needs_positive(BASE, "stiffness", "contact.stiffness");
+    let message = rejected(&without_in(BASE, "stiffness"));
+    assert!(message.contains("missing field"), "{message}");
+    assert_field(&message, "contact.stiffness");
+    let message = rejected(&set_in(BASE, "stiffness", "\"stiff\""));
+    assert_field(&message, "contact.stiffness");
+}
+
+#[test]
+fn friction_is_refused() {
+    for value in ["0.3", "1.0", "1e-9", "inf"] {
+        let text = with_line_in(BASE, "[contact]", &format!("friction = {value}"));
+        let message = rejected(&text);
+        assert_field_value(&message, "contact.friction", &shown(value));
+        assert!(
+            value == "inf" || message.contains("not implemented"),
+            "friction {value}: message does not say friction is not implemented: {message}"
+        );
+    }
+    for value in ["-1.0", "-0.1", "nan", "-inf"] {
+        let text = with_line_in(BASE, "[contact]", &format!("friction = {value}"));
+        assert_field_value(&rejected(&text), "contact.friction", &shown(value));
+    }
+}
+
+#[test]
+fn bad_floor() {
+    for value in ["nan", "inf", "-inf"] {
+        let message = rejected(&set_in(BASE, "floor", value));
+        assert_field_value(&message, "contact.floor", &shown(value));
+    }
+    assert_field(
+        &rejected(&set_in(BASE, "floor", "\"low\"")),
+        "contact.floor",
+    );
+}
+
+#[test]
+fn bad_onset() {
+    for value in ["0.0", "-0.001", "nan", "inf"] {
+        let text = with_line_in(BASE, "[contact]", &format!("onset = {value}"));
+        assert_field_value(&rejected(&text), "contact.onset", &shown(value));
+    }
+}
+
+#[test]
+fn bad_exclusion() {
+    for value in ["-1.0", "-1e-9", "nan", "inf"] {
+        let text = with_line_in(BASE, "[contact]", &format!("exclusion = {value}"));
+        assert_field_value(&rejected(&text), "contact.exclusion", &shown(value));
+    }
+}
+
+#[test]
+fn unknown_contact_field() {
+    let message = rejected(&with_line_in(BASE, "[contact]", "restitution = 0.5"));
+    assert_field(&message, "contact.restitution");
+    let message = rejected(&with_line_in(BASE, "[contact]", "enabled = \"yes\""));
+    assert_field(&message, "contact.enabled");
+}
+
+// ---------------------------------------------------------------- rod.rest_shape
+
+#[test]
+fn bad_rest_shape() {
+    for value in ["\"bogus\"", "\"Initial\"", "\"\"", "1"] {
+        let text = with_line_in(BASE, "[rod]", &format!("rest_shape = {value}"));
+        let message = rejected(&text);
+        assert_field(&message, "rod.rest_shape");
+    }
+    let message = rejected(&with_line_in(BASE, "[rod]", "rest_shape = \"bogus\""));
+    assert!(message.contains("bogus"), "value not named: {message}");
+    assert!(
+        message.contains("arclength") && message.contains("initial"),
+        "allowed variants not listed: {message}"
+    );
+}
+
+/// `rest_shape = "initial"` needs an initial curve with non-zero speed everywhere; the
+/// error must name the scene field (not just "rest shape").
+#[test]
+fn rest_shape_initial_with_degenerate_curve() {
+    let straight = without_in(&without_in(BASE, "start"), "end");
+    let points = ["[0.0, 0.0, 0.0]"; 8].join(", ");
+    let text = with_line_in(
+        &straight,
+        "[rod]",
+        &format!("rest_shape = \"initial\"\ninitial_control_points = [{points}]"),
+    );
+    let message = rejected(&text);
+    assert!(
+        message.contains("rod.rest_shape") || message.contains("rod.initial_control_points"),
+        "a zero-speed initial curve with rest_shape = \"initial\" is refused (when the \
+         system is built) without naming rod.rest_shape or rod.initial_control_points: \
+         {message}"
+    );
+}
+
+// ---------------------------------------------------------------- rod.rest_length
+
+#[test]
+fn rest_length_missing_without_overhand() {
+    let message = rejected(&without_in(BASE, "rest_length"));
+    assert!(message.contains("missing"), "{message}");
+    assert_field(&message, "rod.rest_length");
+    assert!(
+        message.contains("overhand"),
+        "overhand not mentioned: {message}"
+    );
+}
+
+#[test]
+fn rest_length_bad_values_are_named() {
+    assert_needs_positive(BASE, "rest_length", "rod.rest_length");
+}
+
+/// Any written `rod.rest_length`, even the most negative float, is a value: reported as
+/// out of range (or as a conflict with `rod.overhand`), never as missing.
+#[test]
+fn rest_length_most_negative_float_is_not_missing() {
+    let value = "-1.7976931348623157e308";
+    let message = rejected(&set_in(BASE, "rest_length", value));
+    assert!(
+        !message.contains("missing"),
+        "rest_length = {value} is reported as missing instead of out of range: {message}"
+    );
+    assert_field_value(&message, "rod.rest_length", &f64::MIN.to_string());
+    let with_overhand = with_line_in(KNOT, "[rod]", &format!("rest_length = {value}"));
+    let outcome = catch_unwind(AssertUnwindSafe(|| Scene::from_toml(&with_overhand)));
+    match outcome {
+        Err(_) => panic!("rest_length = {value} with rod.overhand panicked"),
+        Ok(Ok(scene)) => panic!(
+            "rest_length = {value} together with rod.overhand is silently replaced \
+             by the knot's length {} instead of being refused as a conflict",
+            scene.rod.rest_length
+        ),
+        Ok(Err(e)) => assert_field(&e.to_string(), "rod.rest_length"),
+    }
+}
+
+// ---------------------------------------------------------------- [rod.overhand]
+
+#[test]
+fn overhand_conflicts_name_the_field() {
+    for (line, field) in [
+        ("rest_length = 1.0", "rod.rest_length"),
+        ("start = [0.0, 0.0, 0.0]", "rod.start"),
+        ("end = [0.5, 0.0, 0.0]", "rod.end"),
+        ("knots = \"uniform\"", "rod.knots"),
+        (
+            "knots = [0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 8, 8, 8]",
+            "rod.knots",
+        ),
+        (
+            "initial_control_points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0], \
+             [0.3, 0.0, 0.0], [0.4, 0.0, 0.0], [0.5, 0.0, 0.0], [0.6, 0.0, 0.0], \
+             [0.7, 0.0, 0.0], [0.8, 0.0, 0.0], [0.9, 0.0, 0.0], [1.0, 0.0, 0.0]]",
+            "rod.initial_control_points",
+        ),
+    ] {
+        let message = rejected(&with_line_in(KNOT, "[rod]", line));
+        assert_field(&message, field);
+        assert!(message.contains("overhand"), "{line}: {message}");
+    }
+    // The default knots, spelled out, are not a conflict.
+    accepted(&with_line_in(KNOT, "[rod]", "knots = \"clamped\""));
+}
+
+#[test]
+fn bad_overhand_size() {
+    for value in ["0.0", "-0.15", "-1.0", "nan", "inf"] {
+        let message = rejected(&set_in(KNOT, "size", value));
+        assert_field_value(&message, "rod.overhand.size", &shown(value));
+    }
+}
+
+#[test]
+fn bad_overhand_span() {
+    for value in ["0.0", "-0.5", "nan", "inf"] {
+        let message = rejected(&set_in(KNOT, "span", value));
+        assert_field_value(&message, "rod.overhand.span", &shown(value));
+    }
+    let spec = OverhandSpec {
+        size: 0.15,
+        span: 0.5,
+        control_points: 11,
+        degree: 3,
+    };
+    let min = spec.min_span();
+    assert!(min > 0.0 && min < 0.5, "min_span {min}");
+    for span in [0.5 * min, 0.99 * min, min] {
+        let message = rejected(&set_in(KNOT, "span", &span.to_string()));
+        assert_field_value(&message, "rod.overhand.span", &span.to_string());
+        assert!(message.contains("width"), "{message}");
+    }
+    accepted(&set_in(KNOT, "span", &(1.2 * min).to_string()));
+}
+
+#[test]
+fn overhand_missing_or_unknown_fields() {
+    let message = rejected(&without_in(KNOT, "span"));
+    assert!(message.contains("missing field"), "{message}");
+    assert_field(&message, "rod.overhand.span");
+    let message = rejected(&without_in(KNOT, "size"));
+    assert_field(&message, "rod.overhand.size");
+    let message = rejected(&with_line_in(KNOT, "[rod.overhand]", "turns = 2"));
+    assert_field(&message, "rod.overhand.turns");
+}
+
+#[test]
+fn overhand_too_few_control_points() {
+    for n in ["5", "6", "3", "2", "0"] {
+        let message = rejected(&set_in(KNOT, "control_points", n));
+        assert_field_value(&message, "rod.control_points", n);
+    }
+    let message = rejected(&set_in(KNOT, "control_points", "500"));
+    assert_field_value(&message, "rod.control_points", "500");
+}
+
+#[test]
+fn overhand_bad_degree() {
+    for degree in ["0", "10"] {
+        let message = rejected(&with_line_in(KNOT, "[rod]", &format!("degree = {degree}")));
+        assert!(
+            message.contains("rod.overhand.degree") || message.contains("rod.degree"),
+            "degree = {degree}: {message}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------- command line
+
+/// A fresh directory for one CLI test.
+fn temp_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "splinerod-bad-input-contact-{}-{test}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes `text` to a fresh directory and runs `splinerod run` on it, which must fail
+/// with code 2 and one `error:` line; that line.
+fn cli_error_for(test: &str, text: &str) -> String {
+    let dir = temp_dir(test);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_splinerod"))
+        .arg("run")
+        .arg(&path)
+        .output()
+        .expect("the splinerod binary runs");
+    std::fs::remove_dir_all(&dir).unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.starts_with("error:"), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "stderr: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
+    stderr
+}
+
+#[test]
+fn cli_bad_contact_exits_with_2() {
+    let stderr = cli_error_for(
+        "friction",
+        &with_line_in(BASE, "[contact]", "friction = 0.3"),
+    );
+    assert_field_value(&stderr, "contact.friction", "0.3");
+    assert!(stderr.contains("not implemented"), "{stderr}");
+    let stderr = cli_error_for("stiffness", &set_in(BASE, "stiffness", "0.0"));
+    assert_field_value(&stderr, "contact.stiffness", "0");
+    let stderr = cli_error_for("radius", &without_in(BASE, "radius"));
+    assert_field(&stderr, "rod.radius");
+    let stderr = cli_error_for(
+        "overhand",
+        &with_line_in(KNOT, "[rod]", "rest_length = 1.0"),
+    );
+    assert_field(&stderr, "rod.rest_length");
+}
