@@ -18,10 +18,12 @@
 //!   segment pair (not needed by the energy; for reporting and refinement).
 //!
 //! `step` is `energy + grad + hess`, the contact cost of one Newton iterate. Times are
-//! means over the repetitions (at least 3, at least about 0.3 s per size), in ns per
-//! knot span; `cold` is the first detection of a new `Contact` (segments, samples and
-//! their basis rows built once per basis), timed once. The growth ratios compare the
-//! time per span with that of the previous size (1.0 = linear).
+//! means over the repetitions, in ns per knot span: at least 3 repetitions and about
+//! 0.3 s per size, but fewer (at least one) when one more would take a size past 50 s
+//! (2 for 100 000 spans on a typical machine, about 25 s each). `cold` is the first
+//! detection of a new `Contact` (segments, samples and their basis rows, built once
+//! per basis), timed once. The growth ratios compare the time per span with that of
+//! the previous size (1.00 = linear).
 //!
 //! Run with `cargo run --release -p splinerod-energies --example contact_scaling`.
 
@@ -49,8 +51,9 @@ const JITTER: f64 = 1.0e-7 * ROD_RADIUS;
 const MIN_TOTAL: Duration = Duration::from_millis(300);
 /// Least repetitions per size.
 const MIN_REPS: usize = 3;
-/// Stop adding repetitions once a size has taken this long (the largest size).
-const MAX_TOTAL: Duration = Duration::from_secs(40);
+/// Fewer repetitions than [`MIN_REPS`] (but at least one) when one more would take the
+/// timed loop of a size past this: the largest size takes about 25 s per repetition.
+const BUDGET: Duration = Duration::from_secs(50);
 
 /// A cubic clamped uniform rod with `n` spans whose control points lie on the helix
 /// (curve parameter = rest arclength).
@@ -158,14 +161,20 @@ fn measure(n: usize) -> Result<Run, CoreError> {
             reason: "is not finite on the helix",
         });
     }
-    // Warm-up: every buffer at its final size.
-    contact.add_gradient(&rod, &mut gradient);
+    // Warm-up: the Hessian's list of far blocks at its final size (the detection's
+    // buffers are sized by the cold call; the gradient allocates nothing and the
+    // closest points' buffer is small next to their cost).
     contact.add_hessian(&rod, HessianKind::Definite, &mut hessian);
-    contact.summary(&rod)?;
 
     let mut summary = None;
     let started = Instant::now();
-    while times.reps < MIN_REPS || (times.total() < MIN_TOTAL && started.elapsed() < MAX_TOTAL) {
+    loop {
+        let done = times.reps >= MIN_REPS && times.total() >= MIN_TOTAL;
+        // Would one more repetition take the loop past the budget? (The largest size.)
+        let next = started.elapsed() + times.total() / times.reps.max(1) as u32;
+        if done || (times.reps > 0 && next > BUDGET) {
+            break;
+        }
         perturb(&mut rod, &base, times.reps);
         gradient.iter_mut().for_each(|g| *g = Vector3::zeros());
         hessian.reset(rod.len(), bandwidth);
@@ -173,8 +182,9 @@ fn measure(n: usize) -> Result<Run, CoreError> {
         timed(&mut times.gradient, || {
             contact.add_gradient(&rod, &mut gradient)
         });
+        let kind = HessianKind::Definite;
         timed(&mut times.hessian, || {
-            contact.add_hessian(&rod, HessianKind::Definite, &mut hessian)
+            contact.add_hessian(&rod, kind, &mut hessian)
         });
         summary = Some(timed(&mut times.summary, || contact.summary(&rod))?);
         times.reps += 1;
