@@ -17,9 +17,11 @@ pub struct ContactSpec {
     pub enabled: bool,
     /// Penalty stiffness `k`, N/m (> 0): a contact pushes with `k` per metre of overlap.
     pub stiffness: f64,
-    /// Coulomb friction coefficient (≥ 0). Only 0 is supported for now.
+    /// Coulomb friction coefficient (≥ 0). Default 0.
     #[serde(default)]
     pub friction: f64,
+    /// Sliding speed below which friction sticks (smoothed), m/s (> 0). Default 1e-3.
+    pub slip_speed: Option<f64>,
     /// Height of a static floor plane `y = floor`, m. Default: no floor.
     pub floor: Option<f64>,
     /// Onset layer, m (> 0): the penalty starts when centre lines are `2r + onset` apart.
@@ -46,9 +48,8 @@ impl ContactSpec {
         positive("rod.radius", r)?;
         positive("contact.stiffness", self.stiffness)?;
         non_negative("contact.friction", self.friction)?;
-        if self.friction > 0.0 {
-            let reason = "Coulomb friction is not implemented yet; set 0";
-            return Err(Error::field("contact.friction", self.friction, reason));
+        if let Some(s) = self.slip_speed {
+            positive("contact.slip_speed", s)?;
         }
         if let Some(h) = self.floor {
             if !h.is_finite() {
@@ -79,6 +80,8 @@ impl Scene {
         }
         params.onset = spec.onset.unwrap_or(params.onset);
         params.exclusion = spec.exclusion.unwrap_or(params.exclusion);
+        params.friction = spec.friction;
+        params.slip_speed = spec.slip_speed.unwrap_or(params.slip_speed);
         Ok(Some(Contact::new(params)?))
     }
 }

@@ -75,6 +75,10 @@ impl Simulation {
             .grabs
             .iter_mut()
             .try_for_each(|g| g.update(end, &self.system.rod));
+        let updated = updated.and_then(|_| match &self.system.contact {
+            Some(c) => Ok(c.begin_step(&self.system.rod, dt)?),
+            None => Ok(()),
+        });
         let solver = updated.and_then(|_| Ok(self.integrator.step(&mut self.system, dt)?));
         let solver = solver.inspect_err(|_| self.system.time = saved_time)?;
         let integrate_seconds = start.elapsed().as_secs_f64();

@@ -283,17 +283,15 @@ fn bad_stiffness() {
 }
 
 #[test]
-fn friction_is_refused() {
-    for value in ["0.3", "1.0", "1e-9", "inf"] {
-        let text = with_line_in(BASE, "[contact]", &format!("friction = {value}"));
-        let message = rejected(&text);
-        assert_field_value(&message, "contact.friction", &shown(value));
-        assert!(
-            value == "inf" || message.contains("not implemented"),
-            "friction {value}: message does not say friction is not implemented: {message}"
-        );
+fn friction_must_be_finite_and_non_negative() {
+    for value in ["0.3", "1.0", "1e-9"] {
+        accepted(&with_line_in(
+            BASE,
+            "[contact]",
+            &format!("friction = {value}"),
+        ));
     }
-    for value in ["-1.0", "-0.1", "nan", "-inf"] {
+    for value in ["-1.0", "-0.1", "nan", "-inf", "inf"] {
         let text = with_line_in(BASE, "[contact]", &format!("friction = {value}"));
         assert_field_value(&rejected(&text), "contact.friction", &shown(value));
     }
@@ -541,10 +539,11 @@ fn cli_error_for(test: &str, text: &str) -> String {
 fn cli_bad_contact_exits_with_2() {
     let stderr = cli_error_for(
         "friction",
-        &with_line_in(BASE, "[contact]", "friction = 0.3"),
+        &with_line_in(BASE, "[contact]", "friction = -0.3"),
     );
-    assert_field_value(&stderr, "contact.friction", "0.3");
-    assert!(stderr.contains("not implemented"), "{stderr}");
+    assert_field_value(&stderr, "contact.friction", "-0.3");
+    let stderr = cli_error_for("slip", &with_line_in(BASE, "[contact]", "slip_speed = 0.0"));
+    assert_field_value(&stderr, "contact.slip_speed", "0");
     let stderr = cli_error_for("stiffness", &set_in(BASE, "stiffness", "0.0"));
     assert_field_value(&stderr, "contact.stiffness", "0");
     let stderr = cli_error_for("radius", &without_in(BASE, "radius"));

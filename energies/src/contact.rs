@@ -28,17 +28,22 @@
 //! \\(\tfrac{1}{2r}\, \phi(g(s))\\): a length of rod equal to its diameter pressed into
 //! the floor resists like one self-contact.
 //!
-//! **What is not modelled:** friction; contacts between segments less than `exclusion`
+//! **Friction** (coefficient `μ`, see the `friction` module): Coulomb friction as a
+//! lagged dissipative potential, frozen at [`Contact::begin_step`].
+//!
+//! **What is not modelled:** contacts between segments less than `exclusion`
 //! apart along the rod (neighbours: a rod bent to radius `r` first touches itself at
 //! \\(\pi r\\), the default), which ignores loops shorter than `exclusion + 2 segment`
 //! (about `7.3 r` by default: a loop of radius 1.2 r, tighter than the rod allows).
 
 mod assemble;
 pub mod detect;
+mod friction;
 mod penalty;
 
 use crate::Energy;
 use detect::{ContactPoint, Detector, SamplePair};
+use friction::Friction;
 use nalgebra::{Matrix3, Vector3};
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
@@ -67,6 +72,13 @@ pub struct ContactParams {
     pub spacing: Real,
     /// Floor plane `(n_f, h)`: unit normal and height, the rod staying on the `+n_f` side.
     pub floor: Option<(Vector3<Real>, Real)>,
+    /// Coulomb friction coefficient `μ` (≥ 0), applied through [`Contact::begin_step`].
+    /// Default 0.
+    pub friction: Real,
+    /// Sliding speed `ε_v` (> 0, m/s) below which friction acts as a stiff spring
+    /// (sticking, slip `ε = ε_v · dt` per step); beyond it the friction force is `μ λ`.
+    /// A resting contact on a slope creeps at about `ε_v tan θ / μ`. Default 1e-3 m/s.
+    pub slip_speed: Real,
 }
 
 impl ContactParams {
@@ -83,6 +95,8 @@ impl ContactParams {
             segment: 2.1 * radius,
             spacing: 0.2 * radius,
             floor: None,
+            friction: 0.0,
+            slip_speed: 1e-3,
         })
     }
 
@@ -107,6 +121,8 @@ impl ContactParams {
         non_negative("exclusion", self.exclusion)?;
         positive("segment", self.segment)?;
         positive("spacing", self.spacing)?;
+        non_negative("friction", self.friction)?;
+        positive("slip_speed", self.slip_speed)?;
         if let Some((normal, height)) = self.floor {
             let unit = (normal.norm() - 1.0).abs() < 1e-12;
             if !unit || !height.is_finite() {
@@ -134,6 +150,7 @@ pub struct Contact {
     params: ContactParams,
     penalty: Penalty,
     detector: Mutex<Detector>,
+    friction: Mutex<Friction>,
 }
 
 impl Clone for Contact {
@@ -142,6 +159,7 @@ impl Clone for Contact {
             params: self.params,
             penalty: self.penalty,
             detector: Mutex::new(Detector::default()),
+            friction: Mutex::new(Friction::default()),
         }
     }
 }
@@ -168,6 +186,7 @@ impl Contact {
                 delta: params.onset,
             },
             detector: Mutex::new(Detector::default()),
+            friction: Mutex::new(Friction::default()),
         })
     }
 
@@ -218,6 +237,39 @@ impl Contact {
         };
         let floor = self.params.radius;
         d.pairs.iter().all(|p| p.distance >= floor)
+    }
+
+    /// Starts a time step of `dt` seconds at the rod's state: freezes every contact's
+    /// normal force and directions for friction (see the `friction` module). Call it
+    /// before each step; without it (or with `μ = 0`) there is no friction.
+    pub fn begin_step(&self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
+        positive("dt", dt)?;
+        let mut friction = self.friction.lock().unwrap_or_else(|e| e.into_inner());
+        friction.begin(rod, self.params.slip_speed * dt);
+        if self.params.friction == 0.0 {
+            return Ok(());
+        }
+        let d = self.detected(rod)?;
+        let mut weights = [(0, 0.0); 2 * MAX_ORDER];
+        for c in &d.pairs {
+            let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(c));
+            let len = pair_rows(&d, c, &mut weights);
+            friction.push(&weights[..len], &c.normal, lambda);
+        }
+        drop(d);
+        let normal = self.params.floor.map_or(Vector3::zeros(), |f| f.0);
+        self.for_each_floor_point(rod, |g, w, first, value| {
+            let mut rows = [(0, 0.0); 2 * MAX_ORDER];
+            for (row, (k, &b)) in rows.iter_mut().zip(value.iter().enumerate()) {
+                *row = (first + k, b);
+            }
+            friction.push(&rows[..value.len()], &normal, -w * self.penalty.slope(g));
+        });
+        Ok(())
+    }
+
+    fn friction_state(&self) -> MutexGuard<'_, Friction> {
+        self.friction.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Appends the material coordinates of both sides of every contact (for the
@@ -292,7 +344,7 @@ impl Energy for Contact {
             .sum();
         drop(d);
         self.for_each_floor_point(rod, |g, w, _, _| e += w * self.penalty.value(g));
-        e
+        e + self.friction_state().energy(rod, self.params.friction)
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
@@ -318,6 +370,8 @@ impl Energy for Contact {
                 gradient[first + k] += force * *b;
             }
         });
+        let mu = self.params.friction;
+        self.friction_state().add_gradient(rod, mu, gradient);
     }
 
     fn add_hessian(&self, rod: &Rod, _kind: HessianKind, hessian: &mut BlockBanded) {
@@ -360,5 +414,7 @@ impl Energy for Contact {
                 }
             }
         });
+        let mu = self.params.friction;
+        self.friction_state().add_hessian(rod, mu, hessian);
     }
 }

@@ -274,3 +274,40 @@ fn coils_of_one_piece_touch_each_other_but_not_their_neighbours() {
         .to_string();
     assert!(err.contains("floor"), "{err}");
 }
+
+#[test]
+fn friction_gradient_matches_finite_differences_sticking_and_sliding() {
+    let mut params = ContactParams::new(R, K).unwrap();
+    params.friction = 0.5;
+    let c = Contact::new(params).unwrap();
+    let base = wiggled(1.9 * R);
+    c.begin_step(&base, 1e-3).unwrap();
+    // ε = slip_speed · dt = 1e-6 m: slides of 1e-7 m stick, 1e-4 m slide.
+    for slide in [1e-7, 1e-4] {
+        let mut rod = base.clone();
+        let knots = rod.basis().knots().to_vec();
+        for (i, q) in rod.positions.iter_mut().enumerate() {
+            if knots[i] >= 1.0 {
+                q.x += slide;
+            }
+        }
+        let g = gradient(&c, &rod);
+        let scale = g.iter().map(|v| v.amax()).fold(0.0, Real::max);
+        let h = 1e-9;
+        for i in 0..rod.len() {
+            for a in 0..3 {
+                let (mut p, mut m) = (rod.clone(), rod.clone());
+                p.positions[i][a] += h;
+                m.positions[i][a] -= h;
+                let fd = (c.energy(&p) - c.energy(&m)) / (2.0 * h);
+                let err = (fd - g[i][a]).abs();
+                assert!(
+                    err <= 1e-4 * scale,
+                    "slide {slide}, {i}.{a}: {fd} vs {}",
+                    g[i][a]
+                );
+            }
+        }
+    }
+    assert!(c.begin_step(&base, 0.0).is_err());
+}

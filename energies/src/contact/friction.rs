@@ -1,0 +1,136 @@
+//! Coulomb friction as a lagged dissipative potential (the incremental-potential form
+//! of implicit Euler). At the start of a step every contact — a pair of material samples
+//! or a floor point — is frozen as a *lag*: its normal force \\(\lambda\\) (the penalty
+//! force then), its tangent projector \\(T = I - n n^T\\) and its weights `w` on the
+//! control points (the sample pair's \\(b_k(s_a) - b_k(s_b)\\), or the floor point's
+//! \\(b_k(s)\\)). During the step its tangential slip is
+//! \\(u = T \sum_k w_k (q_k - q_k^{start})\\), and the friction potential
+//!
+//! \\[ D = \sum_{\text{lags}} \mu \lambda f_0(|u|), \qquad
+//! f_0(y) = \begin{cases} y^2 / (2\epsilon) & y < \epsilon \\\\ y - \epsilon/2 & y \ge \epsilon \end{cases} \\]
+//!
+//! resists with force \\(\mu\lambda\\) once a contact slides more than `ε` in the step
+//! (Coulomb), and like a stiff spring \\(\mu\lambda/\epsilon\\) below (sticking, smoothed).
+//! Its Hessian is \\(\mu\lambda\, w w^T \otimes H_u\\) with \\(H_u = T/\epsilon\\) sticking and
+//! \\(H_u = (T - \hat u \hat u^T)/|u|\\) sliding (positive semi-definite). Lagging the normal
+//! force and the directions keeps the potential convex in the step; it is exact for
+//! implicit Euler as the steps shrink, and dissipative for the other integrators.
+
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::basis::MAX_ORDER;
+use splinerod_core::{BlockBanded, Real, Rod};
+
+/// One frozen contact.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Lag {
+    pub weights: [(usize, Real); 2 * MAX_ORDER],
+    pub len: usize,
+    pub tangent: Matrix3<Real>,
+    /// Normal force, N.
+    pub lambda: Real,
+}
+
+/// The lags of the current step and the positions it started from.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Friction {
+    pub lags: Vec<Lag>,
+    start: Vec<Vector3<Real>>,
+    epoch: Option<u64>,
+    /// Slip `ε` of this step, m.
+    eps: Real,
+}
+
+impl Friction {
+    /// Starts a step at the rod's state with slip `eps` (m): clears the lags (fill them
+    /// with [`Self::push`]).
+    pub fn begin(&mut self, rod: &Rod, eps: Real) {
+        self.eps = eps;
+        self.lags.clear();
+        self.start.clone_from(&rod.positions);
+        self.epoch = Some(rod.topology_epoch());
+    }
+
+    /// Adds a lag with weights `weights`, normal `normal` and force `lambda`.
+    pub fn push(&mut self, weights: &[(usize, Real)], normal: &Vector3<Real>, lambda: Real) {
+        let mut lag = Lag {
+            weights: [(0, 0.0); 2 * MAX_ORDER],
+            len: weights.len().min(2 * MAX_ORDER),
+            tangent: Matrix3::identity() - normal * normal.transpose(),
+            lambda,
+        };
+        lag.weights[..lag.len].copy_from_slice(&weights[..lag.len]);
+        self.lags.push(lag);
+    }
+
+    /// Whether the lags apply to `rod` (same basis as at the step's start).
+    fn active(&self, rod: &Rod) -> bool {
+        self.epoch == Some(rod.topology_epoch()) && self.start.len() == rod.len() && self.eps > 0.0
+    }
+
+    /// Tangential slip of `lag` since the step's start.
+    fn slip(&self, lag: &Lag, q: &[Vector3<Real>]) -> Vector3<Real> {
+        let moved: Vector3<Real> = lag.weights[..lag.len]
+            .iter()
+            .map(|&(k, w)| (q[k] - self.start[k]) * w)
+            .sum();
+        lag.tangent * moved
+    }
+
+    /// \\(D\\) at the rod's positions, for coefficient `mu`.
+    pub fn energy(&self, rod: &Rod, mu: Real) -> Real {
+        if !self.active(rod) {
+            return 0.0;
+        }
+        let eps = self.eps;
+        let f0 = |y: Real| {
+            if y < eps {
+                0.5 * y * y / eps
+            } else {
+                y - 0.5 * eps
+            }
+        };
+        self.lags
+            .iter()
+            .map(|lag| mu * lag.lambda * f0(self.slip(lag, &rod.positions).norm()))
+            .sum()
+    }
+
+    /// Adds \\(\partial D/\partial q\\).
+    pub fn add_gradient(&self, rod: &Rod, mu: Real, gradient: &mut [Vector3<Real>]) {
+        if !self.active(rod) {
+            return;
+        }
+        let eps = self.eps;
+        for lag in &self.lags {
+            let u = self.slip(lag, &rod.positions);
+            let force = u * (mu * lag.lambda / u.norm().max(eps));
+            for &(k, w) in &lag.weights[..lag.len] {
+                gradient[k] += force * w;
+            }
+        }
+    }
+
+    /// Adds the (positive semi-definite) Hessian of \\(D\\).
+    pub fn add_hessian(&self, rod: &Rod, mu: Real, hessian: &mut BlockBanded) {
+        if !self.active(rod) {
+            return;
+        }
+        let eps = self.eps;
+        for lag in &self.lags {
+            let u = self.slip(lag, &rod.positions);
+            let y = u.norm();
+            let h = if y < eps {
+                lag.tangent / eps
+            } else {
+                let along = u / y;
+                (lag.tangent - along * along.transpose()) / y
+            } * (mu * lag.lambda);
+            let weights = &lag.weights[..lag.len];
+            for (a, &(i, wi)) in weights.iter().enumerate() {
+                for &(j, wj) in &weights[a..] {
+                    hessian.add_coupling(i, j, &(h * (wi * wj)));
+                }
+            }
+        }
+    }
+}
