@@ -52,6 +52,7 @@ pub mod scene;
 mod scene_adapt;
 mod scene_contact;
 mod scene_ensemble;
+mod scene_shape;
 mod simulation;
 mod system;
 

@@ -8,6 +8,7 @@
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
+pub use crate::scene_shape::{OverhandShape, RestShape};
 use crate::Error;
 use serde::Deserialize;
 
@@ -84,27 +85,6 @@ pub struct RodSpec {
     /// or `"initial"` (the initial curve, the paper's I₀).
     #[serde(default)]
     pub rest_shape: RestShape,
-}
-
-/// `rod.rest_shape`.
-#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum RestShape {
-    /// The material coordinate is rest arclength: unit speed is unstrained.
-    #[default]
-    Arclength,
-    /// The initial curve is unstrained (rest metric \\(|I_0'(s)|^2\\)).
-    Initial,
-}
-
-/// `[rod.overhand]`: the initial shape of [`crate::knot::overhand_knot`].
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct OverhandShape {
-    /// Outer diameter of the knot seen from above, m (> 0).
-    pub size: f64,
-    /// Distance between the two ends, which lie at `(±span/2, 0, 0)`, m.
-    pub span: f64,
 }
 
 fn default_degree() -> usize {
@@ -261,60 +241,6 @@ impl Scene {
             Error::Scene(m) => Error::Scene(format!("{}: {m}", path.display())),
             other => other,
         })
-    }
-
-    /// Sets `rod.rest_length` from the file, or it and `rod.initial_control_points` from
-    /// `rod.overhand`; errors if the scene gives both, or neither.
-    pub fn resolve_shape(&mut self) -> Result<(), Error> {
-        let r = &mut self.rod;
-        let Some(shape) = r.overhand else {
-            let Some(length) = r.given_rest_length else {
-                return Err(Error::Scene(
-                    "missing field `rod.rest_length` (required unless rod.overhand gives the shape)"
-                        .into(),
-                ));
-            };
-            r.rest_length = length;
-            return Ok(());
-        };
-        let given = [
-            ("rod.rest_length", r.given_rest_length.is_some()),
-            (
-                "rod.initial_control_points",
-                r.initial_control_points.is_some(),
-            ),
-            ("rod.start", r.start.is_some()),
-            ("rod.end", r.end.is_some()),
-            ("rod.knots", r.knots != KnotsSpec::default()),
-        ];
-        if let Some((field, _)) = given.iter().find(|g| g.1) {
-            let reason = "rod.overhand sets the shape and the rest length: remove one of them";
-            return Err(Error::field(*field, "given", reason));
-        }
-        let spec = crate::knot::OverhandSpec {
-            size: shape.size,
-            span: shape.span,
-            control_points: r.control_points,
-            degree: r.degree,
-        };
-        let knot = crate::knot::overhand_knot(&spec).map_err(|e| match e {
-            Error::InvalidField {
-                field,
-                value,
-                reason,
-            } => Error::InvalidField {
-                field: match field.as_str() {
-                    "control_points" | "degree" => format!("rod.{field}"),
-                    _ => format!("rod.overhand.{field}"),
-                },
-                value,
-                reason,
-            },
-            other => other,
-        })?;
-        r.rest_length = knot.rest_length;
-        r.initial_control_points = Some(knot.control_points.iter().map(|p| (*p).into()).collect());
-        Ok(())
     }
 
     /// Range checks of every value; the error names the field.

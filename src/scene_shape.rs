@@ -1,0 +1,84 @@
+//! Initial shapes and rest states of `[rod]` (documented in `scenes/README.md`):
+//! `rod.rest_shape` and the `[rod.overhand]` knot, which sets the rest length and the
+//! control points before validation.
+
+use crate::scene::{KnotsSpec, Scene};
+use crate::Error;
+use serde::Deserialize;
+
+/// `rod.rest_shape`.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum RestShape {
+    /// The material coordinate is rest arclength: unit speed is unstrained.
+    #[default]
+    Arclength,
+    /// The initial curve is unstrained (rest metric \\(|I_0'(s)|^2\\)).
+    Initial,
+}
+
+/// `[rod.overhand]`: the initial shape of [`crate::knot::overhand_knot`].
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OverhandShape {
+    /// Outer diameter of the knot seen from above, m (> 0).
+    pub size: f64,
+    /// Distance between the two ends, which lie at `(±span/2, 0, 0)`, m.
+    pub span: f64,
+}
+
+impl Scene {
+    /// Sets `rod.rest_length` from the file, or it and `rod.initial_control_points` from
+    /// `rod.overhand`; errors if the scene gives both, or neither.
+    pub fn resolve_shape(&mut self) -> Result<(), Error> {
+        let r = &mut self.rod;
+        let Some(shape) = r.overhand else {
+            let Some(length) = r.given_rest_length else {
+                return Err(Error::Scene(
+                    "missing field `rod.rest_length` (required unless rod.overhand gives the shape)"
+                        .into(),
+                ));
+            };
+            r.rest_length = length;
+            return Ok(());
+        };
+        let given = [
+            ("rod.rest_length", r.given_rest_length.is_some()),
+            (
+                "rod.initial_control_points",
+                r.initial_control_points.is_some(),
+            ),
+            ("rod.start", r.start.is_some()),
+            ("rod.end", r.end.is_some()),
+            ("rod.knots", r.knots != KnotsSpec::default()),
+        ];
+        if let Some((field, _)) = given.iter().find(|g| g.1) {
+            let reason = "rod.overhand sets the shape and the rest length: remove one of them";
+            return Err(Error::field(*field, "given", reason));
+        }
+        let spec = crate::knot::OverhandSpec {
+            size: shape.size,
+            span: shape.span,
+            control_points: r.control_points,
+            degree: r.degree,
+        };
+        let knot = crate::knot::overhand_knot(&spec).map_err(|e| match e {
+            Error::InvalidField {
+                field,
+                value,
+                reason,
+            } => Error::InvalidField {
+                field: match field.as_str() {
+                    "control_points" | "degree" => format!("rod.{field}"),
+                    _ => format!("rod.overhand.{field}"),
+                },
+                value,
+                reason,
+            },
+            other => other,
+        })?;
+        r.rest_length = knot.rest_length;
+        r.initial_control_points = Some(knot.control_points.iter().map(|p| (*p).into()).collect());
+        Ok(())
+    }
+}
