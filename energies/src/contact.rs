@@ -400,6 +400,7 @@ impl Energy for Contact {
             }
             local.finish(hessian);
         }
+        local.flush(hessian);
         d.group_hessian = local;
         drop(d);
         let nn: Matrix3<Real> = self
