@@ -1,5 +1,5 @@
 //! Tightness of a knot over a run (scenes with `[rod.overhand]`): the knot length and
-//! radius of [`crate::knot::tightness`], seen from above (`+y`, the direction the
+//! radius of [`crate::knot::knot_diagram`], seen from above (`+y`, the direction the
 //! initial knot is laid out for), sampled every [`KnotTrack::EVERY`] seconds and at the
 //! end, for the JSON result.
 
@@ -42,10 +42,10 @@ impl KnotTrack {
         if !(due || force) || self.t.last() == Some(&t) {
             return Ok(());
         }
-        let crossings = crate::knot::projection_crossings(&system.rod, Vector3::y(), SAMPLES)?;
+        let diagram = crate::knot::knot_diagram(&system.rod, Vector3::y(), SAMPLES)?;
+        let tight = diagram.tightness;
         self.determinant
-            .push(crate::knot::knot_determinant(&crossings));
-        let tight = crate::knot::tightness(&system.rod, Vector3::y(), SAMPLES)?;
+            .push(crate::knot::knot_determinant(&diagram.crossings));
         self.t.push(t);
         self.knot_length.push(tight.map(|k| k.knot_length));
         self.radius.push(tight.map(|k| k.radius));

@@ -47,29 +47,30 @@ impl Rod {
     }
 
     /// Material coordinates of the cuts (interior knots of multiplicity `degree + 1`),
-    /// increasing. One pass over the knots.
-    pub fn cuts(&self) -> Vec<Real> {
+    /// increasing, without allocating. One pass over the knots.
+    pub fn cut_points(&self) -> impl Iterator<Item = Real> + '_ {
         let d = self.basis().degree();
         let (start, end) = self.basis().domain();
         let knots = self.basis().knots();
-        let mut out = Vec::new();
         let mut run = 0;
-        for (i, &t) in knots.iter().enumerate() {
+        knots.iter().enumerate().filter_map(move |(i, &t)| {
             run = if i > 0 && knots[i - 1] == t {
                 run + 1
             } else {
                 1
             };
-            if run == d + 1 && t > start && t < end {
-                out.push(t);
-            }
-        }
-        out
+            (run == d + 1 && t > start && t < end).then_some(t)
+        })
+    }
+
+    /// [`cut_points`](Self::cut_points), collected.
+    pub fn cuts(&self) -> Vec<Real> {
+        self.cut_points().collect()
     }
 
     /// Number of mechanically independent pieces (one more than the number of cuts).
     pub fn pieces(&self) -> usize {
-        self.cuts().len() + 1
+        self.cut_points().count() + 1
     }
 
     /// Whether knot `index` belongs to a cut (removing it would reconnect two pieces).

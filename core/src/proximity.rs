@@ -38,8 +38,10 @@
 //! [`narrow`] for the maths.
 
 pub mod narrow;
+mod sweep;
 
 pub use narrow::{closest_points, closest_points_between, Closest};
+pub use sweep::BoxSweep;
 
 use crate::basis::{spans, Span};
 use crate::rod::{check_finite, non_negative};
@@ -55,8 +57,7 @@ pub struct SpanBoxes {
     piece: Vec<usize>,
     lower: Vec<Vector3<Real>>,
     upper: Vec<Vector3<Real>>,
-    order: Vec<usize>,
-    axis: usize,
+    sweep: BoxSweep,
     margin: Real,
 }
 
@@ -100,8 +101,7 @@ impl SpanBoxes {
             self.lower.push(lo);
             self.upper.push(hi);
         }
-        let axis = self.widest_axis();
-        self.sort(axis);
+        self.sweep.sort(&self.lower, &self.upper);
         Ok(())
     }
 
@@ -116,19 +116,12 @@ impl SpanBoxes {
     ) -> Result<(), CoreError> {
         non_negative("exclusion", exclusion)?;
         out.clear();
-        let axis = self.axis;
-        for (a, &i) in self.order.iter().enumerate() {
-            let top = self.upper[i][axis];
-            for &j in &self.order[a + 1..] {
-                if self.lower[j][axis] > top {
-                    break;
-                }
-                let pair = (i.min(j), i.max(j));
-                if self.overlap(i, j) && self.material_separation(pair.0, pair.1) >= exclusion {
-                    out.push(pair);
-                }
+        self.sweep.pairs(&self.lower, &self.upper, 0.0, |i, j| {
+            let pair = (i.min(j), i.max(j));
+            if self.material_separation(pair.0, pair.1) >= exclusion {
+                out.push(pair);
             }
-        }
+        });
         Ok(())
     }
 
@@ -159,7 +152,7 @@ impl SpanBoxes {
 
     /// The sweep axis (0, 1 or 2) chosen by the last update.
     pub fn axis(&self) -> usize {
-        self.axis
+        self.sweep.axis()
     }
 
     /// The margin of the last update.
@@ -185,65 +178,9 @@ impl SpanBoxes {
             self.piece.capacity(),
             self.lower.capacity(),
             self.upper.capacity(),
-            self.order.capacity(),
+            self.sweep.capacity(),
         ]
     }
-
-    fn overlap(&self, i: usize, j: usize) -> bool {
-        (0..3).all(|k| self.lower[i][k] <= self.upper[j][k] && self.lower[j][k] <= self.upper[i][k])
-    }
-
-    /// Axis along which the box centres spread most.
-    fn widest_axis(&self) -> usize {
-        let mut min = Vector3::repeat(Real::INFINITY);
-        let mut max = Vector3::repeat(Real::NEG_INFINITY);
-        for (lo, hi) in self.lower.iter().zip(&self.upper) {
-            let centre = (lo + hi) * 0.5;
-            min = min.inf(&centre);
-            max = max.sup(&centre);
-        }
-        (max - min).imax()
-    }
-
-    /// Sorts `order` by the lower bound along `axis`: insertion sort from the previous
-    /// order when it is still a permutation of the spans on the same axis, `sort_unstable`
-    /// otherwise or when the warm start needs more than `4n` moves.
-    fn sort(&mut self, axis: usize) {
-        let n = self.spans.len();
-        let warm = axis == self.axis && self.order.len() == n;
-        self.axis = axis;
-        if !warm {
-            self.order.clear();
-            self.order.extend(0..n);
-        }
-        let lower = &self.lower;
-        let key = |i: usize| lower[i][axis];
-        if !warm || !insertion_sort(&mut self.order, key, 4 * n) {
-            self.order
-                .sort_unstable_by(|&a, &b| key(a).total_cmp(&key(b)));
-        }
-    }
-}
-
-/// Sorts `order` by `key` with at most `budget` element moves; returns false (leaving a
-/// permutation of the input) when the budget runs out.
-fn insertion_sort(order: &mut [usize], key: impl Fn(usize) -> Real, budget: usize) -> bool {
-    let mut moves = 0;
-    for a in 1..order.len() {
-        let item = order[a];
-        let k = key(item);
-        let mut b = a;
-        while b > 0 && key(order[b - 1]) > k {
-            order[b] = order[b - 1];
-            b -= 1;
-            moves += 1;
-        }
-        order[b] = item;
-        if moves > budget {
-            return false;
-        }
-    }
-    true
 }
 
 /// Bounding box of `points`, inflated by `margin` on every side.

@@ -176,18 +176,31 @@ pub struct Tightness {
     pub crossings: usize,
 }
 
-/// Tightness of the knot seen along `direction` with a `samples`-point polyline; `None`
-/// when the projection has no crossing (no knot). Fails like [`projection_crossings`].
-pub fn tightness(
+/// A rod seen along a direction: its crossings and, if there are any, how tight the knot
+/// is. One sampling and one crossing search serve both.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KnotDiagram {
+    /// The crossings of the projection, as [`projection_crossings`] gives them.
+    pub crossings: Vec<Crossing>,
+    /// The knot's tightness; `None` without crossings (no knot).
+    pub tightness: Option<Tightness>,
+}
+
+/// The diagram of `rod` seen along `direction` with a `samples`-point polyline. Fails
+/// like [`projection_crossings`].
+pub fn knot_diagram(
     rod: &Rod,
     direction: Vector3<Real>,
     samples: usize,
-) -> Result<Option<Tightness>, Error> {
+) -> Result<KnotDiagram, Error> {
     let d = unit_direction(direction)?;
     let (s, points) = sample_rod(rod, samples)?;
     let crossings = polyline_crossings(&points, &s, &d);
     let Some((lo, hi)) = knot_extent(&crossings) else {
-        return Ok(None);
+        return Ok(KnotDiagram {
+            crossings,
+            tightness: None,
+        });
     };
     let mut section = vec![rod.point(lo)?, rod.point(hi)?];
     section.extend(
@@ -201,11 +214,25 @@ pub fn tightness(
         .iter()
         .map(|p| (p - centroid).norm())
         .fold(0.0, Real::max);
-    Ok(Some(Tightness {
+    let tightness = Some(Tightness {
         knot_length: hi - lo,
         radius,
         crossings: crossings.len(),
-    }))
+    });
+    Ok(KnotDiagram {
+        crossings,
+        tightness,
+    })
+}
+
+/// Tightness of the knot seen along `direction` with a `samples`-point polyline; `None`
+/// when the projection has no crossing (no knot). Fails like [`projection_crossings`].
+pub fn tightness(
+    rod: &Rod,
+    direction: Vector3<Real>,
+    samples: usize,
+) -> Result<Option<Tightness>, Error> {
+    Ok(knot_diagram(rod, direction, samples)?.tightness)
 }
 
 /// The determinant \\(|\Delta(-1)|\\) of the knot whose diagram has `crossings` (3 for a

@@ -75,7 +75,7 @@ mod relax;
 mod shape;
 
 pub use diagram::{
-    is_alternating, is_trefoil_diagram, knot_determinant, knot_extent, projection_crossings,
-    tightness, Crossing, Tightness,
+    is_alternating, is_trefoil_diagram, knot_determinant, knot_diagram, knot_extent,
+    projection_crossings, tightness, Crossing, KnotDiagram, Tightness,
 };
 pub use shape::{overhand_knot, OverhandKnot, OverhandSpec, MAX_CONTROL_POINTS};

@@ -31,7 +31,7 @@
 
 use super::assemble::GroupHessian;
 use nalgebra::Vector3;
-use splinerod_core::proximity::closest_points_between;
+use splinerod_core::proximity::{closest_points_between, BoxSweep};
 use splinerod_core::{BasisValues, CoreError, Real, Rod};
 
 /// Closest points `C(s)` and `C(t)` of two contact segments closer than the reach.
@@ -79,10 +79,6 @@ impl Samples {
 struct Segment {
     lo: Real,
     hi: Real,
-    /// Box of the segment's curve: its samples' box widened by half the speed bound
-    /// times the sample spacing.
-    lower: Vector3<Real>,
-    upper: Vector3<Real>,
     /// Its samples: `samples[first..end]`.
     first: usize,
     end: usize,
@@ -92,7 +88,11 @@ struct Segment {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Detector {
     segments: Vec<Segment>,
-    order: Vec<usize>,
+    /// Boxes of the segments' curves: their samples' boxes widened by half the speed
+    /// bound times the sample spacing.
+    lower: Vec<Vector3<Real>>,
+    upper: Vec<Vector3<Real>>,
+    sweep: BoxSweep,
     breaks: Vec<Real>,
     /// The samples of every segment.
     pub samples: Samples,
@@ -212,7 +212,6 @@ impl Detector {
                     hi,
                     first,
                     end: samples.s.len(),
-                    ..Segment::default()
                 });
             }
         }
@@ -265,24 +264,12 @@ impl Detector {
         }
     }
 
-    /// The domain's ends and the cuts (knots of multiplicity `d + 1`), in order.
+    /// The domain's ends and the cuts, in order.
     fn piece_breaks(&mut self, rod: &Rod) {
-        let d = rod.basis().degree();
         let (start, end) = rod.basis().domain();
-        let knots = rod.basis().knots();
         self.breaks.clear();
         self.breaks.push(start);
-        let mut run = 0;
-        for (i, &t) in knots.iter().enumerate() {
-            run = if i > 0 && knots[i - 1] == t {
-                run + 1
-            } else {
-                1
-            };
-            if run == d + 1 && t > start && t < end {
-                self.breaks.push(t);
-            }
-        }
+        self.breaks.extend(rod.cut_points());
         self.breaks.push(end);
     }
 
@@ -301,7 +288,9 @@ impl Detector {
         // Non-empty spans [knots[k], knots[k + 1]], k = first + d, in order.
         let mut k = d;
         let p = &self.samples.position;
-        for seg in &mut self.segments {
+        self.lower.clear();
+        self.upper.clear();
+        for seg in &self.segments {
             while knots[k + 1] <= seg.lo {
                 k += 1;
             }
@@ -322,53 +311,32 @@ impl Detector {
                 ),
                 |(lo, hi), x| (lo.inf(x), hi.sup(x)),
             );
-            (seg.lower, seg.upper) = (lo - widen, hi + widen);
+            self.lower.push(lo - widen);
+            self.upper.push(hi + widen);
         }
     }
 
-    /// Sort and sweep over the segment boxes: candidate segment pairs, boxes closer
-    /// than `reach` on every axis and segments at least `exclusion` apart along the rod.
+    /// Sort and sweep over the segment boxes ([`BoxSweep`]): candidate segment pairs,
+    /// boxes closer than `reach` on every axis and segments at least `exclusion` apart
+    /// along the rod.
     fn sweep(&mut self, reach: Real, exclusion: Real) {
         self.candidates.clear();
-        let axis = widest_axis(&self.segments);
-        self.order.clear();
-        self.order.extend(0..self.segments.len());
-        let segments = &self.segments;
-        self.order
-            .sort_unstable_by(|&a, &b| segments[a].lower[axis].total_cmp(&segments[b].lower[axis]));
-        for (a, &i) in self.order.iter().enumerate() {
-            let si = &self.segments[i];
-            let top = si.upper[axis] + reach;
-            for &j in &self.order[a + 1..] {
-                let sj = &self.segments[j];
-                if sj.lower[axis] > top {
-                    break;
-                }
-                let (first, second) = if si.lo < sj.lo { (i, j) } else { (j, i) };
-                let gap = self.segments[second].lo - self.segments[first].hi;
-                let near = (0..3).all(|k| {
-                    sj.lower[k] <= si.upper[k] + reach && si.lower[k] <= sj.upper[k] + reach
-                });
-                if near && gap >= exclusion {
-                    self.candidates.push((first as u32, second as u32));
-                }
+        self.sweep.sort(&self.lower, &self.upper);
+        let (segments, candidates) = (&self.segments, &mut self.candidates);
+        self.sweep.pairs(&self.lower, &self.upper, reach, |i, j| {
+            let (first, second) = if segments[i].lo < segments[j].lo {
+                (i, j)
+            } else {
+                (j, i)
+            };
+            if segments[second].lo - segments[first].hi >= exclusion {
+                candidates.push((first as u32, second as u32));
             }
-        }
+        });
     }
 
     /// Number of candidate segment pairs of the last detection.
     pub fn candidate_count(&self) -> usize {
         self.candidates.len()
     }
-}
-
-/// The coordinate axis along which the segment boxes spread most.
-fn widest_axis(segments: &[Segment]) -> usize {
-    let mut lo = Vector3::repeat(Real::INFINITY);
-    let mut hi = Vector3::repeat(Real::NEG_INFINITY);
-    for s in segments {
-        lo = lo.inf(&s.lower);
-        hi = hi.sup(&s.lower);
-    }
-    (hi - lo).imax()
 }
