@@ -2,6 +2,9 @@
 //! panic: through the library (`Scene::from_toml`, `Scene::build_system`, `run`) and
 //! through the `splinerod` command line (exit code 2, one `error:` line on stderr).
 
+mod common;
+
+use common::*;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -40,23 +43,6 @@ samples = 11
 probes = [0.5]
 "#;
 
-/// The line of `text` that sets `key`; there must be exactly one.
-fn line_of<'a>(text: &'a str, key: &str) -> &'a str {
-    let prefix = format!("{key} = ");
-    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with(&prefix)).collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "`{key}` must be set exactly once in the base"
-    );
-    lines[0]
-}
-
-/// `text` with the value of `key` replaced by `value` (TOML syntax).
-fn set_in(text: &str, key: &str, value: &str) -> String {
-    text.replacen(line_of(text, key), &format!("{key} = {value}"), 1)
-}
-
 /// The base scene with the value of `key` replaced.
 fn set(key: &str, value: &str) -> String {
     set_in(BASE, key, value)
@@ -64,25 +50,12 @@ fn set(key: &str, value: &str) -> String {
 
 /// The base scene without the line that sets `key`.
 fn without(key: &str) -> String {
-    BASE.replacen(&format!("{}\n", line_of(BASE, key)), "", 1)
+    without_in(BASE, key)
 }
 
 /// The base scene with `line` added after the header `table`.
 fn with_line(table: &str, line: &str) -> String {
-    assert!(BASE.contains(table), "no {table} in the base");
-    BASE.replacen(table, &format!("{table}\n{line}"), 1)
-}
-
-/// Parses, validates and builds `text`, which must fail without panicking; the error.
-fn rejected(text: &str) -> String {
-    let outcome = catch_unwind(AssertUnwindSafe(|| {
-        Scene::from_toml(text).and_then(|scene| scene.build_system().map(|_| ()))
-    }));
-    match outcome {
-        Ok(Err(e)) => e.to_string(),
-        Ok(Ok(())) => panic!("scene accepted:\n{text}"),
-        Err(_) => panic!("scene panicked instead of failing:\n{text}"),
-    }
+    with_line_in(BASE, table, line)
 }
 
 /// Parses and validates `text`, which must pass; only building it (or running it) fails.
@@ -94,32 +67,9 @@ fn rejected_when_built(text: &str) -> String {
     run_error
 }
 
-fn assert_field(message: &str, field: &str) {
-    assert!(message.contains(field), "`{field}` not named in: {message}");
-}
-
-/// `message` names `field` followed by `value` (as Rust displays it).
-fn assert_field_value(message: &str, field: &str, value: &str) {
-    assert_field(message, field);
-    let after = message.split_once(field).unwrap().1;
-    let after = after.trim_start_matches(['`', ' ', '=']);
-    assert!(
-        after.starts_with(value),
-        "`{field}` not followed by {value} in: {message}"
-    );
-}
-
-/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
-fn shown(value: &str) -> String {
-    value.parse::<f64>().unwrap().to_string()
-}
-
 /// Negative, zero and non-finite values of `key` are rejected naming `field`.
 fn assert_needs_positive(key: &str, field: &str) {
-    for value in ["-2.5", "-1.0", "0.0", "0", "nan", "inf", "-inf"] {
-        let toml_value = if value == "0" { "0.0" } else { value };
-        assert_field_value(&rejected(&set(key, toml_value)), field, &shown(value));
-    }
+    assert_needs_positive_in(BASE, key, field);
 }
 
 #[test]

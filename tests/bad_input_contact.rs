@@ -3,6 +3,9 @@
 //! never a panic; through the library (`Scene::from_toml`, `Scene::build_system`) and
 //! through the `splinerod` command line (exit code 2).
 
+mod common;
+
+use common::*;
 use splinerod::knot::OverhandSpec;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -57,34 +60,6 @@ dt = 0.001
 duration = 0.01
 "#;
 
-/// The line of `text` that sets `key`; there must be exactly one.
-fn line_of<'a>(text: &'a str, key: &str) -> &'a str {
-    let prefix = format!("{key} = ");
-    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with(&prefix)).collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "`{key}` must be set exactly once in the base"
-    );
-    lines[0]
-}
-
-/// `text` with the value of `key` replaced by `value` (TOML syntax).
-fn set_in(text: &str, key: &str, value: &str) -> String {
-    text.replacen(line_of(text, key), &format!("{key} = {value}"), 1)
-}
-
-/// `text` without the line that sets `key`.
-fn without_in(text: &str, key: &str) -> String {
-    text.replacen(&format!("{}\n", line_of(text, key)), "", 1)
-}
-
-/// `text` with `line` added after the header `table`.
-fn with_line_in(text: &str, table: &str, line: &str) -> String {
-    assert!(text.contains(table), "no {table} in the base");
-    text.replacen(table, &format!("{table}\n{line}"), 1)
-}
-
 /// `text` with the `[contact]` table (header and body, up to the next table) removed.
 fn without_contact(text: &str) -> String {
     let start = text.find("[contact]\n").expect("a [contact] table");
@@ -94,61 +69,6 @@ fn without_contact(text: &str) -> String {
             .expect("a blank line after [contact]")
         + 2;
     format!("{}{}", &text[..start], &text[end..])
-}
-
-/// Parses, validates and builds `text`, which must fail without panicking; the error.
-fn rejected(text: &str) -> String {
-    let outcome = catch_unwind(AssertUnwindSafe(|| {
-        Scene::from_toml(text).and_then(|scene| scene.build_system().map(|_| ()))
-    }));
-    match outcome {
-        Ok(Err(e)) => e.to_string(),
-        Ok(Ok(())) => panic!("scene accepted:\n{text}"),
-        Err(_) => panic!("scene panicked instead of failing:\n{text}"),
-    }
-}
-
-/// Parses, validates and builds `text`, which must pass.
-fn accepted(text: &str) -> Scene {
-    let outcome = catch_unwind(AssertUnwindSafe(|| {
-        let scene = Scene::from_toml(text)?;
-        scene.build_system()?;
-        Ok::<_, splinerod::Error>(scene)
-    }));
-    match outcome {
-        Ok(Ok(scene)) => scene,
-        Ok(Err(e)) => panic!("scene rejected: {e}\n{text}"),
-        Err(_) => panic!("scene panicked:\n{text}"),
-    }
-}
-
-fn assert_field(message: &str, field: &str) {
-    assert!(message.contains(field), "`{field}` not named in: {message}");
-}
-
-/// `message` names `field` followed by `value` (as Rust displays it).
-fn assert_field_value(message: &str, field: &str, value: &str) {
-    assert_field(message, field);
-    let after = message.split_once(field).unwrap().1;
-    let after = after.trim_start_matches(['`', ' ', '=']);
-    assert!(
-        after.starts_with(value),
-        "`{field}` not followed by {value} in: {message}"
-    );
-}
-
-/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
-fn shown(value: &str) -> String {
-    value.parse::<f64>().unwrap().to_string()
-}
-
-/// Negative, zero and non-finite values of `key` in `text` are rejected naming `field`
-/// and the value.
-fn assert_needs_positive(text: &str, key: &str, field: &str) {
-    for value in ["-2.5", "-1.0", "0.0", "nan", "inf", "-inf"] {
-        let message = rejected(&set_in(text, key, value));
-        assert_field_value(&message, field, &shown(value));
-    }
 }
 
 // ---------------------------------------------------------------- valid scenes
@@ -236,9 +156,9 @@ fn defaults_and_edge_values_are_accepted() {
 
 #[test]
 fn bad_radius() {
-    assert_needs_positive(BASE, "radius", "rod.radius");
+    assert_needs_positive_in(BASE, "radius", "rod.radius");
     // Also without contact: the radius is range-checked on its own.
-    assert_needs_positive(&without_contact(BASE), "radius", "rod.radius");
+    assert_needs_positive_in(&without_contact(BASE), "radius", "rod.radius");
 }
 
 /// `rod.radius` is range-checked whether or not contact uses it (README: finite, > 0),
@@ -274,7 +194,7 @@ fn contact_without_radius() {
 
 #[test]
 fn bad_stiffness() {
-    assert_needs_positive(BASE, "stiffness", "contact.stiffness");
+    assert_needs_positive_in(BASE, "stiffness", "contact.stiffness");
     let message = rejected(&without_in(BASE, "stiffness"));
     assert!(message.contains("missing field"), "{message}");
     assert_field(&message, "contact.stiffness");
@@ -385,7 +305,7 @@ fn rest_length_missing_without_overhand() {
 
 #[test]
 fn rest_length_bad_values_are_named() {
-    assert_needs_positive(BASE, "rest_length", "rod.rest_length");
+    assert_needs_positive_in(BASE, "rest_length", "rod.rest_length");
 }
 
 /// Any written `rod.rest_length`, even the most negative float, is a value: reported as

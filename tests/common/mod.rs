@@ -1,0 +1,94 @@
+//! Editing and checking scene texts for the bad-input tests: replace, drop or add one
+//! line, and assert that a scene is rejected with an error naming the field and value.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use splinerod::Scene;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// The line of `text` that sets `key`; there must be exactly one.
+pub fn line_of<'a>(text: &'a str, key: &str) -> &'a str {
+    let prefix = format!("{key} = ");
+    let lines: Vec<&str> = text.lines().filter(|l| l.starts_with(&prefix)).collect();
+    assert_eq!(
+        lines.len(),
+        1,
+        "`{key}` must be set exactly once in the base"
+    );
+    lines[0]
+}
+
+/// `text` with the value of `key` replaced by `value` (TOML syntax).
+pub fn set_in(text: &str, key: &str, value: &str) -> String {
+    text.replacen(line_of(text, key), &format!("{key} = {value}"), 1)
+}
+
+/// `text` without the line that sets `key`.
+pub fn without_in(text: &str, key: &str) -> String {
+    text.replacen(&format!("{}\n", line_of(text, key)), "", 1)
+}
+
+/// `text` with `line` added after the header `table`.
+pub fn with_line_in(text: &str, table: &str, line: &str) -> String {
+    assert!(text.contains(table), "no {table} in the base");
+    text.replacen(table, &format!("{table}\n{line}"), 1)
+}
+
+/// Parses, validates and builds `text`, which must fail without panicking; the error.
+pub fn rejected(text: &str) -> String {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        Scene::from_toml(text).and_then(|scene| scene.build_system().map(|_| ()))
+    }));
+    match outcome {
+        Ok(Err(e)) => e.to_string(),
+        Ok(Ok(())) => panic!("scene accepted:\n{text}"),
+        Err(_) => panic!("scene panicked instead of failing:\n{text}"),
+    }
+}
+
+/// Parses, validates and builds `text`, which must pass.
+pub fn accepted(text: &str) -> Scene {
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        let scene = Scene::from_toml(text)?;
+        scene.build_system()?;
+        Ok::<_, splinerod::Error>(scene)
+    }));
+    match outcome {
+        Ok(Ok(scene)) => scene,
+        Ok(Err(e)) => panic!("scene rejected: {e}\n{text}"),
+        Err(_) => panic!("scene panicked:\n{text}"),
+    }
+}
+
+/// `message` names `field`.
+pub fn assert_field(message: &str, field: &str) {
+    assert!(message.contains(field), "`{field}` not named in: {message}");
+}
+
+/// `message` names `field` followed by `value` (as Rust displays it).
+pub fn assert_field_value(message: &str, field: &str, value: &str) {
+    assert_field(message, field);
+    let after = message.split_once(field).unwrap().1;
+    let after = after.trim_start_matches(['`', ' ', '=']);
+    assert!(
+        after.starts_with(value),
+        "`{field}` not followed by {value} in: {message}"
+    );
+}
+
+/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
+pub fn shown(value: &str) -> String {
+    value.parse::<f64>().unwrap().to_string()
+}
+
+/// Negative, zero and non-finite values of `key` in `text` are rejected naming `field`
+/// and the value.
+pub fn assert_needs_positive_in(text: &str, key: &str, field: &str) {
+    for value in ["-2.5", "-1.0", "0.0", "0", "nan", "inf", "-inf"] {
+        let toml_value = if value == "0" { "0.0" } else { value };
+        assert_field_value(
+            &rejected(&set_in(text, key, toml_value)),
+            field,
+            &shown(value),
+        );
+    }
+}
