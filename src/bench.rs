@@ -44,6 +44,21 @@ pub struct BenchResult {
     pub stiff_catenary_settle_s: Real,
     /// Control points used for that, the error reached (m) and the steps taken (dt = 0.02 s).
     pub stiff_catenary: (usize, Real, usize),
+    /// Cases of [`crate::hard_cases`] that ran with every step converged.
+    pub hard_cases_converged: usize,
+    /// Cases in the hard-case suite.
+    pub hard_cases_total: usize,
+    /// Mean Newton iterations per step on the default scene (`scenes/hanging_cable.toml`).
+    pub newton_per_step_default: Real,
+}
+
+/// The README's default scene, embedded.
+const DEFAULT_SCENE: &str = include_str!("../scenes/hanging_cable.toml");
+
+/// Mean Newton iterations per step of the default scene.
+fn newton_per_step_default() -> Result<Real, Error> {
+    let result = crate::run(&crate::Scene::from_toml(DEFAULT_SCENE)?)?;
+    Ok(result.solver.newton_iterations as Real / result.steps.max(1) as Real)
 }
 
 fn one_iteration() -> Result<Box<dyn Integrator>, Error> {
@@ -206,6 +221,7 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let one = ensemble_rate(count, steps, 1)?;
     let all = ensemble_rate(count, steps, threads)?;
     let (settle, n, error, steps) = stiff_catenary()?;
+    let hard_cases_total = crate::hard_cases::hard_cases()?.len();
     Ok(BenchResult {
         step_us_16,
         static_newton_us_16,
@@ -218,5 +234,8 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         bytes_per_cp,
         stiff_catenary_settle_s: settle,
         stiff_catenary: (n, error, steps),
+        hard_cases_converged: crate::hard_cases::count_converged()?,
+        hard_cases_total,
+        newton_per_step_default: newton_per_step_default()?,
     })
 }

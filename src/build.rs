@@ -152,6 +152,7 @@ impl Scene {
             line_search: self.solver.line_search,
             linear_solver: self.linear_solver(),
             max_step: self.solver.max_step,
+            accept_unconverged: self.solver.accept_unconverged,
         }
     }
 
@@ -170,6 +171,7 @@ impl Scene {
             max_iterations: self.solver.newton_iterations.unwrap_or(d.max_iterations),
             tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
             linear_solver: self.linear_solver(),
+            ..d
         }
     }
 
@@ -188,6 +190,7 @@ impl Scene {
         let integrator = self.integrator()?;
         let mut sim = Simulation::new(self.build_system()?, integrator);
         sim.adapter = self.adapter()?;
+        sim.control = self.step_control();
         Ok(sim)
     }
 

@@ -39,6 +39,7 @@ mod build;
 mod ensemble;
 mod error;
 mod grab;
+pub mod hard_cases;
 pub mod knot;
 mod knot_track;
 pub mod observe;
@@ -53,7 +54,9 @@ mod scene_adapt;
 mod scene_contact;
 mod scene_ensemble;
 mod scene_shape;
+mod scene_solver;
 mod simulation;
+pub mod substep;
 mod system;
 
 pub use ensemble::Ensemble;

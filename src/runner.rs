@@ -42,8 +42,17 @@ pub struct SolverTotals {
     pub symbolic_analyses: usize,
     /// Line-search step reductions.
     pub line_search_cuts: usize,
-    /// Steps whose Newton iterations did not reach the tolerance.
+    /// Steps whose Newton iterations did not reach the tolerance (only with
+    /// `solver.accept_unconverged = true`; otherwise such a step is split).
     pub unconverged_steps: usize,
+    /// Integrator steps accepted (sub-steps; equals `steps` when none was split).
+    pub substeps: usize,
+    /// Sub-steps rolled back and retried shorter.
+    pub rejected_steps: usize,
+    /// Shortest accepted sub-step, s (`null` for a static solve).
+    pub smallest_dt: Option<Real>,
+    /// Pseudo-transient continuation steps of a static solve whose Newton failed.
+    pub continuation_steps: usize,
 }
 
 /// Contact over the run (scenes with `[contact]`).
@@ -160,6 +169,10 @@ impl Tally {
         totals.symbolic_analyses += report.solver.symbolic_analyses;
         totals.line_search_cuts += report.solver.line_search_cuts;
         totals.unconverged_steps += usize::from(!report.solver.converged);
+        totals.substeps += report.substeps.substeps;
+        totals.rejected_steps += report.substeps.rejected;
+        let h = report.substeps.smallest_dt;
+        totals.smallest_dt = Some(totals.smallest_dt.map_or(h, |s| s.min(h)));
     }
 
     /// Adds one step's counters and contact summary (`radius` of the rod, m).
@@ -262,7 +275,8 @@ fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunR
         newton_iterations: stats.newton_iterations,
         symbolic_analyses: stats.symbolic_analyses,
         line_search_cuts: stats.line_search_cuts,
-        unconverged_steps: 0,
+        continuation_steps: solver.continuation_steps(),
+        ..SolverTotals::default()
     };
     tally.pin_forces = solver.pin_forces().to_vec();
     tally.contact(&system)?;
@@ -462,6 +476,20 @@ impl RunResult {
             out.push_str(&format!(
                 "note: {} steps stopped at the Newton iteration limit\n",
                 self.solver.unconverged_steps
+            ));
+        }
+        let s = &self.solver;
+        if s.rejected_steps > 0 {
+            let h = s.smallest_dt.unwrap_or_default();
+            out.push_str(&format!(
+                "sub-stepping: {} rejected sub-steps retried shorter, shortest {h:.3e} s\n",
+                s.rejected_steps
+            ));
+        }
+        if s.continuation_steps > 0 {
+            out.push_str(&format!(
+                "static solve: Newton needed {} continuation steps\n",
+                s.continuation_steps
             ));
         }
         out

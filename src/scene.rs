@@ -179,6 +179,16 @@ pub struct SolverSpec {
     pub linear_solver: LinearSolverSpec,
     /// Largest move of a material point per Newton iteration, m (> 0). Default: no limit.
     pub max_step: Option<f64>,
+    /// Smallest sub-step, s (> 0, at most `dt`): a step whose Newton solve fails is
+    /// retried in halves down to this length. Default `dt · 1e-6`.
+    pub min_dt: Option<f64>,
+    /// Local time-discretisation error allowed per sub-step, m (> 0): sub-steps are
+    /// shortened until the implicit-Euler error estimate is below it. Default: off.
+    pub time_tolerance: Option<f64>,
+    /// Accept a step that reached `newton_iterations` without converging (counted in
+    /// `solver.unconverged_steps`) instead of splitting it. Default false.
+    #[serde(default)]
+    pub accept_unconverged: bool,
 }
 
 /// `solver.linear_solver`.
@@ -373,46 +383,6 @@ impl Scene {
         }
         if let Some(e) = r.end {
             finite_vec("rod.end", e)?;
-        }
-        Ok(())
-    }
-
-    fn validate_solver(&self) -> Result<(), Error> {
-        let s = &self.solver;
-        if s.method != Method::Static {
-            positive(
-                "solver.dt",
-                s.dt.ok_or_else(|| {
-                    Error::field("solver.dt", "missing", "time stepping needs a time step")
-                })?,
-            )?;
-            let duration = s.duration.ok_or_else(|| {
-                Error::field(
-                    "solver.duration",
-                    "missing",
-                    "time stepping needs a duration",
-                )
-            })?;
-            positive("solver.duration", duration)?;
-        } else {
-            for (name, value) in [("solver.dt", s.dt), ("solver.duration", s.duration)] {
-                if let Some(v) = value {
-                    positive(name, v)?;
-                }
-            }
-        }
-        if let Some(m) = s.max_step {
-            positive("solver.max_step", m)?;
-        }
-        if s.newton_iterations == Some(0) {
-            return Err(Error::field(
-                "solver.newton_iterations",
-                0,
-                "must be at least 1",
-            ));
-        }
-        if let Some(t) = s.tolerance {
-            positive("solver.tolerance", t)?;
         }
         Ok(())
     }

@@ -7,6 +7,7 @@
 //! through the exact maps, telling every energy about each map, with the grabs and the
 //! contact points as interactions — and record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
 
+use crate::substep::{StepControl, SubstepCounts, SubstepState};
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter};
 use splinerod_core::{KnotMap, Real, Rod};
@@ -25,6 +26,8 @@ pub struct StepReport {
     pub control_points: usize,
     /// Wall time of the integration stage, s.
     pub integrate_seconds: Real,
+    /// Sub-steps taken, rejected and the shortest one (see [`crate::substep`]).
+    pub substeps: SubstepCounts,
     /// Contacts at the end of the step (`None` without contact).
     pub contact: Option<ContactSummary>,
 }
@@ -41,7 +44,11 @@ pub struct Simulation {
     pub time: Real,
     /// Steps taken.
     pub steps: usize,
+    /// Sub-stepping settings (smallest sub-step, optional time error tolerance).
+    pub control: StepControl,
+    pub(crate) substep: SubstepState,
     interactions: Vec<Real>,
+    saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
 }
 
 impl Simulation {
@@ -53,7 +60,10 @@ impl Simulation {
             adapter: None,
             time: 0.0,
             steps: 0,
+            control: StepControl::default(),
+            substep: SubstepState::default(),
             interactions: Vec::new(),
+            saved: (Vec::new(), Vec::new()),
         }
     }
 
@@ -63,26 +73,30 @@ impl Simulation {
         self
     }
 
-    /// Advances by `dt`. On an integration error the state is unchanged and time does
+    /// Advances by `dt`, in as many sub-steps as the solver needs (see
+    /// [`crate::substep`]). On an integration error the state is unchanged and time does
     /// not advance.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::field("dt", dt, "must be finite and positive"));
+        }
         let start = Instant::now();
-        let end = self.time + dt;
         let saved_time = self.system.time;
-        self.system.time = end;
-        let updated = self
-            .system
-            .grabs
-            .iter_mut()
-            .try_for_each(|g| g.update(end, &self.system.rod));
-        let updated = updated.and_then(|_| match &self.system.contact {
-            Some(c) => Ok(c.begin_step(&self.system.rod, dt)?),
-            None => Ok(()),
-        });
-        let solver = updated.and_then(|_| Ok(self.integrator.step(&mut self.system, dt)?));
-        let solver = solver.inspect_err(|_| self.system.time = saved_time)?;
+        self.saved.0.clone_from(&self.system.rod.positions);
+        self.saved.1.clone_from(&self.system.rod.velocities);
+        let (solver, substeps) = match self.integrate(dt) {
+            Ok(done) => done,
+            Err(e) => {
+                self.system.time = saved_time;
+                let rod = &mut self.system.rod;
+                rod.positions.clone_from(&self.saved.0);
+                rod.velocities.clone_from(&self.saved.1);
+                return Err(e);
+            }
+        };
         let integrate_seconds = start.elapsed().as_secs_f64();
-        self.time = end;
+        self.time += dt;
+        self.system.time = self.time;
         self.steps += 1;
         let adapt = self.adapt()?;
         let contact = self.system.contact.as_ref();
@@ -92,6 +106,7 @@ impl Simulation {
             adapt,
             control_points: self.system.rod.len(),
             integrate_seconds,
+            substeps,
             contact,
         })
     }

@@ -429,5 +429,30 @@ fn cli_valid_scene_writes_json() {
         assert!(get(&result, key).is_array(), "`{key}` is not an array");
     }
     assert!(get(&result, "solver.newton_iterations").is_number());
+    for key in ["substeps", "rejected_steps", "continuation_steps"] {
+        assert!(get(&result, &format!("solver.{key}")).is_number(), "{key}");
+    }
+    assert!(
+        get(&result, "solver.smallest_dt").is_null(),
+        "static: no dt"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sub_stepping_settings_out_of_range() {
+    let with = |line: &str| with_line("[solver]", line);
+    assert_needs_positive_in(&with("min_dt = 1e-4"), "min_dt", "solver.min_dt");
+    let text = with("time_tolerance = 1e-4");
+    assert_needs_positive_in(&text, "time_tolerance", "solver.time_tolerance");
+    let message = rejected(&with("min_dt = 0.02"));
+    assert_field_value(&message, "solver.min_dt", "0.02");
+    assert!(message.contains("solver.dt"), "{message}");
+    accepted(&with("min_dt = 0.01"));
+    let stderr = cli_error_for("min_dt", &with("min_dt = 0.5"));
+    assert!(stderr.contains("solver.min_dt"), "{stderr}");
+    let stderr = cli_error_for("time_tolerance", &with("time_tolerance = nan"));
+    assert!(stderr.contains("solver.time_tolerance"), "{stderr}");
+    let message = rejected(&with("accept_unconverged = 1"));
+    assert!(message.contains("accept_unconverged"), "{message}");
 }

@@ -67,22 +67,32 @@ fn no_coupling_across_the_cut() {
     }
 }
 
+/// Largest difference between two right-piece trajectories, m.
+fn largest_gap(a: &Trajectory, b: &Trajectory) -> Real {
+    a.0.iter()
+        .zip(&b.0)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).amax()))
+        .fold(0.0, Real::max)
+}
+
 #[test]
-fn pulling_one_piece_leaves_the_other_bit_identical() {
+fn pulling_one_piece_leaves_the_other_unchanged() {
     // A fixed number of Newton iterations and no line search: the solver's control flow
-    // no longer depends on the other piece, so the right piece is computed bit for bit
-    // the same way.
+    // no longer depends on the other piece, so the right piece is computed the same way,
+    // up to round-off: the factorisation is chosen for the whole matrix (Cholesky, or
+    // the indefinite block LDLT while the pulled piece is compressed), and its
+    // arithmetic differs in the last bits.
     let fixed = NewtonParams {
         max_iterations: 3,
         tolerance: 1e-300,
         line_search: false,
+        accept_unconverged: true,
         ..NewtonParams::default()
     };
     let (alone, pulled) = (run_after_cut(fixed, false), run_after_cut(fixed, true));
-    assert_eq!(
-        alone.0, pulled.0,
-        "right piece changed although only the left was pulled"
-    );
+    let worst = largest_gap(&alone, &pulled);
+    println!("fixed Newton iterations: right piece differs by {worst:.2e} m");
+    assert!(worst < 1e-13, "right piece changed by {worst:e} m");
     let moved = alone.1.iter().zip(&pulled.1).map(|(a, b)| (a - b).norm());
     assert!(
         moved.fold(0.0, Real::max) > 0.05,
@@ -94,12 +104,7 @@ fn pulling_one_piece_leaves_the_other_bit_identical() {
         run_after_cut(NewtonParams::default(), false),
         run_after_cut(NewtonParams::default(), true),
     );
-    let worst = alone
-        .0
-        .iter()
-        .zip(&pulled.0)
-        .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).amax()))
-        .fold(0.0, Real::max);
+    let worst = largest_gap(&alone, &pulled);
     println!("default Newton settings: right piece differs by {worst:.2e} m");
     assert!(worst < 1e-9);
 }

@@ -66,6 +66,21 @@ pub enum IntegratorError {
     Core(#[from] CoreError),
 }
 
+impl IntegratorError {
+    /// Whether the failure belongs to the solve, not to the input: Newton stopped at its
+    /// limit or diverged, a value became non-finite, or the Newton matrix was indefinite.
+    /// A shorter time step (or, for a static solve, continuation) may cure it.
+    pub fn is_recoverable(&self) -> bool {
+        matches!(
+            self,
+            Self::NotConverged { .. }
+                | Self::Diverged { .. }
+                | Self::NonFinite { .. }
+                | Self::NotPositiveDefinite { .. }
+        )
+    }
+}
+
 /// Error unless `value` is finite and positive.
 pub(crate) fn positive(name: &'static str, value: Real) -> Result<(), IntegratorError> {
     if value.is_finite() && value > 0.0 {

@@ -10,7 +10,9 @@
 //!
 //! residual \\(r = \nabla\Phi = M(x - \hat v) + \beta \nabla E(\hat q + \beta x) +
 //! \beta\alpha M x\\), Newton matrix \\(A = (1 + \beta\alpha) M + \beta^2 K\\) (exact
-//! Hessian first, the definite one if `A` is not positive definite). The rod holds
+//! Hessian, factorised by Cholesky or, under compression, by the indefinite block
+//! \\(U^TDU\\); the definite Hessian of [`HessianKind::Definite`] for an iteration
+//! whose exact step would not descend). The rod holds
 //! positions \\(\hat q + \beta x\\) and velocities `x` while Newton runs. Pins are reached
 //! at the *end* of the step, which is \\(\hat q + \rho x\\) with a reach `ρ` (= β except
 //! for the midpoint rule): \\(G x = (p - G\hat q)/\rho\\).
@@ -37,6 +39,7 @@ struct IncrementalProblem<'a> {
     alpha: Real,
     scratch: &'a mut [Vector3<Real>],
     hessian: HessianKind,
+    definite_only: bool,
 }
 
 impl NewtonProblem for IncrementalProblem<'_> {
@@ -98,6 +101,16 @@ impl NewtonProblem for IncrementalProblem<'_> {
         self.hessian = HessianKind::Definite;
         retry
     }
+
+    fn indefinite_allowed(&self) -> bool {
+        !self.definite_only && self.hessian == HessianKind::Exact
+    }
+
+    /// Every iteration starts from the exact Hessian again: the definite one converges
+    /// only linearly, and is needed only while the exact step climbs the merit.
+    fn on_step(&mut self, _step_length: Real) {
+        self.hessian = HessianKind::Exact;
+    }
 }
 
 /// Buffers of an implicit scheme: the start-of-step state (for rollback), the base of
@@ -121,6 +134,9 @@ pub(crate) struct Stepper {
     alpha: Real,
     /// β of the last solve (pin forces are multipliers / β).
     beta: Real,
+    /// Never factorise an indefinite matrix: every step descends to a minimum of the
+    /// merit, never to a saddle (the static solver's continuation path needs this).
+    pub definite_only: bool,
 }
 
 impl Stepper {
@@ -160,6 +176,8 @@ impl Stepper {
     }
 
     /// Runs Newton on the incremental problem; the solution is left applied to the rod.
+    /// A solve that stops at the iteration limit is [`IntegratorError::NotConverged`]
+    /// unless `params.accept_unconverged` (or a single iteration was asked for).
     pub fn solve(
         &mut self,
         system: &mut dyn System,
@@ -181,14 +199,23 @@ impl Stepper {
             alpha: self.alpha,
             scratch: &mut self.scratch,
             hessian: HessianKind::Exact,
+            definite_only: self.definite_only,
         };
-        newton::solve(
+        let stats = newton::solve(
             &mut problem,
             system,
             &mut self.x,
             params,
             &mut self.workspace,
-        )
+        )?;
+        if stats.converged || params.accept_unconverged || params.max_iterations == 1 {
+            Ok(stats)
+        } else {
+            Err(IntegratorError::NotConverged {
+                iterations: stats.newton_iterations,
+                residual: stats.residual,
+            })
+        }
     }
 
     /// Forces the pins exerted on the rod during the last step, N: the KKT multipliers

@@ -26,6 +26,7 @@
 #![warn(missing_docs)]
 
 mod banded_cholesky;
+pub mod banded_ldlt;
 mod bdf2;
 mod block_pattern;
 pub mod conformance;
@@ -101,6 +102,13 @@ pub trait Integrator: Send + Sync {
     fn name(&self) -> &str;
     /// Advances `system` by `dt` seconds; pins must already hold their end-of-step targets.
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError>;
+    /// Whether the scheme conserves the energy of an undamped, unforced system (the
+    /// implicit midpoint rule): a step that gains energy is then an error of the step
+    /// length (for nonlinear elasticity such a scheme can blow up at long steps), and a
+    /// sub-stepping controller may reject it. Default false.
+    fn conserves_energy(&self) -> bool {
+        false
+    }
     /// Forces the pins exerted on the rod during the last step, N, one per pin (empty if
     /// the integrator does not compute them).
     fn pin_forces(&self) -> Vec<Vector3<Real>> {

@@ -223,8 +223,11 @@ pub struct LinearSolver {
     pub kind: LinearSolverKind,
     banded: crate::BandedCholesky,
     sparse: SparseCholesky,
+    ldlt: crate::banded_ldlt::BandedLdlt,
     /// The path of the last [`factor`](Self::factor) call, which the solves use.
     active: Option<LinearSolverKind>,
+    /// Whether the last factorisation was [`factor_indefinite`](Self::factor_indefinite).
+    indefinite: bool,
 }
 
 impl LinearSolver {
@@ -246,15 +249,42 @@ impl LinearSolver {
             self.kind
         };
         self.active = Some(kind);
+        self.indefinite = false;
         match kind {
             LinearSolverKind::Banded => self.banded.factor(a),
             LinearSolverKind::Sparse => self.sparse.factor(a, epoch).map(|_| ()),
         }
     }
 
+    /// Factorises a symmetric, possibly indefinite, banded `a` by the block
+    /// [`BandedLdlt`](crate::banded_ldlt::BandedLdlt); errors for far blocks or a nearly
+    /// singular pivot.
+    pub fn factor_indefinite(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+        self.active = None;
+        self.ldlt.factor(a)?;
+        self.active = Some(LinearSolverKind::Banded);
+        self.indefinite = true;
+        Ok(())
+    }
+
+    /// A direction of negative curvature of the matrix last given to
+    /// [`factor_indefinite`](Self::factor_indefinite), and its curvature (see
+    /// [`BandedLdlt::negative_curvature`](crate::banded_ldlt::BandedLdlt::negative_curvature)).
+    pub fn negative_curvature(&self, d: &mut [nalgebra::Vector3<Real>]) -> Option<Real> {
+        self.ldlt.negative_curvature(d)
+    }
+
+    /// Whether the current factorisation is the indefinite one.
+    pub fn is_indefinite(&self) -> bool {
+        self.active.is_some() && self.indefinite
+    }
+
     /// Solves in place for right-hand sides stored column after column, with the
     /// factorisation of the last [`factor`](Self::factor) call (an error if it failed).
     pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
+        if self.is_indefinite() {
+            return self.ldlt.solve_in_place(rhs);
+        }
         match self.active {
             Some(LinearSolverKind::Banded) => self.banded.solve_in_place(rhs),
             Some(LinearSolverKind::Sparse) => self.sparse.solve_in_place(rhs),

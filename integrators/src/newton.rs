@@ -11,6 +11,20 @@
 //! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails.
 //! It stops when the step moves no material point by more than
 //! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
+//!
+//! **Why a step test, and its round-off floor.** The unknowns are positions (or
+//! velocities times the step), so the step length is the error that matters to a user,
+//! in metres, relative to the rod: near a solution Newton's step is the distance to it
+//! (quadratic convergence makes the next one negligible). The residual, the other
+//! candidate, mixes stiff and soft directions: for EA = 1e7 N a force of 1e-7 N is a
+//! 1e-14 m axial error but a 1e-8 m transverse one. But a step cannot shrink below what
+//! round-off in the residual allows, `‖A⁻¹ η‖` for a residual noise `η`, which grows
+//! with the conditioning (the stiff-to-soft ratio: about 1e-12 m for that cable, at a
+//! 1e-12 · L tolerance). Rather than guess `η`, the solver watches for it: when two full
+//! steps in a row fail to halve while already below [`ROUND_OFF_BAND`] tolerances,
+//! quadratic convergence has stopped at the floor, and the step is compared with the
+//! widened tolerance instead. (A definite Hessian converging linearly at rate `c` would
+//! be stopped there too, with an error of at most `step / (1 − c)`.)
 
 use crate::kkt::Constraints;
 use crate::linear::{LinearSolver, LinearSolverKind};
@@ -22,6 +36,11 @@ use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
 /// as divergence (a safety net against numerical explosion, e.g. a linearised step on a
 /// rod too stiff for its time step), not as motion.
 pub const DIVERGENCE_LENGTHS: Real = 1e3;
+
+/// Width of the round-off band, in tolerances: once two full steps in a row fail to
+/// halve while the step is below `ROUND_OFF_BAND · tolerance`, the iterates sit at the
+/// floor that round-off sets for the problem's conditioning (see the module docs).
+pub const ROUND_OFF_BAND: Real = 1e3;
 
 /// Settings of Newton's method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,6 +60,12 @@ pub struct NewtonParams {
     /// iterates follow the path of the step instead of jumping (e.g. over a contact).
     /// Default `None` (no limit).
     pub max_step: Option<Real>,
+    /// Accept a time step whose Newton iterations stopped at `max_iterations` without
+    /// converging (it is then counted as unconverged). Default false: such a step is an
+    /// error ([`IntegratorError::NotConverged`]) and is rolled back, so that a caller can
+    /// retry it with a shorter step. One iteration (`max_iterations = 1`, the linearised
+    /// scheme) is always accepted.
+    pub accept_unconverged: bool,
 }
 
 impl Default for NewtonParams {
@@ -51,6 +76,7 @@ impl Default for NewtonParams {
             line_search: true,
             linear_solver: LinearSolverKind::Banded,
             max_step: None,
+            accept_unconverged: false,
         }
     }
 }
@@ -97,6 +123,13 @@ pub trait NewtonProblem {
     fn on_not_positive_definite(&mut self) -> bool {
         false
     }
+    /// Whether an indefinite but nonsingular `A` (the exact Hessian under compression) may
+    /// give the step, factorised by [`crate::banded_ldlt::BandedLdlt`]; its step is used
+    /// only if it descends the merit, otherwise
+    /// [`on_not_positive_definite`](Self::on_not_positive_definite) is called. Default false.
+    fn indefinite_allowed(&self) -> bool {
+        false
+    }
     /// Whether a step moving material points by at most `step` (m) ends the solve; the
     /// default compares it with `tolerance` (m).
     fn converged(&self, step: Real, tolerance: Real) -> bool {
@@ -128,6 +161,11 @@ impl NewtonWorkspace {
         &self.multipliers
     }
 
+    /// The Newton matrix buffer (scratch between solves).
+    pub(crate) fn matrix_mut(&mut self) -> &mut BlockBanded {
+        &mut self.matrix
+    }
+
     fn resize(&mut self, n: usize, pins: usize) {
         for v in [&mut self.r, &mut self.base, &mut self.dx] {
             v.resize(n, Vector3::zeros());
@@ -156,11 +194,17 @@ pub fn solve(
     let tolerance = params.tolerance * system.rod().material().rest_length;
     let length = problem.length_per_unknown();
     let mut stats = StepStats::default();
+    let mut previous = [Real::INFINITY; 2];
     problem.apply(system.rod_mut(), x);
     while stats.newton_iterations < params.max_iterations {
         stats.newton_iterations += 1;
         problem.residual(system, &mut ws.r);
-        newton_direction(problem, system, x, ws, &mut stats)?;
+        let mut slope = newton_direction(problem, system, x, ws, &mut stats)?;
+        let descends = slope < 0.0;
+        if ws.solver.is_indefinite() && !descends && problem.on_not_positive_definite() {
+            // The exact step climbs the merit: take the definite one instead.
+            slope = newton_direction(problem, system, x, ws, &mut stats)?;
+        }
         // A step already below the tolerance is taken whole: its merit change is rounding.
         let mut full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
         let limit = DIVERGENCE_LENGTHS * system.rod().material().rest_length;
@@ -172,9 +216,18 @@ pub fn solve(
             full = cap;
         }
         let search = params.line_search && full > tolerance;
-        let t = line_search(problem, system, x, ws, search, &mut stats)?;
+        let t = line_search(problem, system, x, ws, search, slope, &mut stats)?;
         problem.on_step(t);
-        if problem.converged(full * t, tolerance) {
+        let stalled = full <= ROUND_OFF_BAND * tolerance
+            && full >= 0.5 * previous[0]
+            && previous[0] >= 0.5 * previous[1];
+        previous = [full, previous[0]];
+        let reach = if stalled {
+            ROUND_OFF_BAND * tolerance
+        } else {
+            tolerance
+        };
+        if problem.converged(full * t, reach) {
             stats.converged = true;
             break;
         }
@@ -182,35 +235,27 @@ pub fn solve(
     Ok(stats)
 }
 
-/// Assembles and factorises `A`, then solves the KKT system into `ws.dx` and the multipliers.
+/// Assembles and factorises `A` (the exact Hessian by Cholesky, else by the indefinite
+/// factorisation if the problem allows, else the problem's definite fallback), then
+/// solves the KKT system into `ws.dx` and the multipliers. Returns the slope
+/// \(r \cdot \Delta x\) (negative for a descent direction from a feasible iterate, where
+/// \(G\Delta x = 0\) makes it \((r - G^T\mu)\cdot\Delta x\)).
 fn newton_direction(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
     x: &[Vector3<Real>],
     ws: &mut NewtonWorkspace,
     stats: &mut StepStats,
-) -> Result<(), IntegratorError> {
-    let epoch = system.rod().topology_epoch();
+) -> Result<Real, IntegratorError> {
     let analyses = ws.solver.analyses();
     let rho = loop {
-        problem.matrix(system, &mut ws.matrix);
-        let rho = problem.augmentation();
-        ws.constraints.add_gram(rho, &mut ws.matrix);
-        ws.constraints.points.eliminate_matrix(&mut ws.matrix);
-        match ws.solver.factor(&ws.matrix, epoch) {
-            Ok(()) => break rho,
-            Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
-                return Err(IntegratorError::NonFinite {
-                    what: "Newton matrix",
-                })
-            }
-            Err(IntegratorError::NotPositiveDefinite { .. })
-                if problem.on_not_positive_definite() => {}
-            Err(e) => return Err(e),
+        let rho = factor_matrix(problem, system, ws)?;
+        match ws.constraints.factor(&mut ws.solver) {
+            Err(_) if ws.solver.is_indefinite() && problem.on_not_positive_definite() => {}
+            result => break result.map(|_| rho)?,
         }
     };
     stats.symbolic_analyses += ws.solver.analyses() - analyses;
-    ws.constraints.factor(&mut ws.solver)?;
     ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
     ws.constraints.add_gram_rhs(rho, x, &mut ws.base);
     for (i, (r, aug)) in ws.r.iter().zip(&ws.base).enumerate() {
@@ -225,16 +270,88 @@ fn newton_direction(
     for (i, d) in ws.dx.iter_mut().enumerate() {
         *d = Vector3::new(ws.flat[3 * i], ws.flat[3 * i + 1], ws.flat[3 * i + 2]);
     }
-    // Residual with the constraint forces removed: r − Gᵀμ.
+    // Residual with the constraint forces removed: r − Gᵀμ (ws.r keeps r for a retry).
+    ws.base.copy_from_slice(&ws.r);
     ws.constraints
-        .add_transpose(&ws.multipliers, -1.0, &mut ws.r);
-    stats.residual = ws.r.iter().map(|v| v.norm_squared()).sum::<Real>().sqrt();
+        .add_transpose(&ws.multipliers, -1.0, &mut ws.base);
+    stats.residual = ws
+        .base
+        .iter()
+        .map(|v| v.norm_squared())
+        .sum::<Real>()
+        .sqrt();
     if !stats.residual.is_finite() || ws.dx.iter().any(|v| !v.iter().all(|c| c.is_finite())) {
         return Err(IntegratorError::NonFinite {
             what: "Newton step",
         });
     }
-    Ok(())
+    Ok(ws.base.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum())
+}
+
+/// Assembles `A` (with the pins' augmentation and eliminations) and factorises it, as
+/// described at [`newton_direction`]; returns the augmentation weight ρ.
+fn factor_matrix(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+) -> Result<Real, IntegratorError> {
+    let epoch = system.rod().topology_epoch();
+    loop {
+        problem.matrix(system, &mut ws.matrix);
+        let rho = problem.augmentation();
+        ws.constraints.add_gram(rho, &mut ws.matrix);
+        ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+        match ws.solver.factor(&ws.matrix, epoch) {
+            Ok(()) => return Ok(rho),
+            Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
+                return Err(IntegratorError::NonFinite {
+                    what: "Newton matrix",
+                })
+            }
+            Err(IntegratorError::NotPositiveDefinite { .. })
+                if problem.indefinite_allowed()
+                    && !ws.matrix.has_far_blocks()
+                    && ws.solver.factor_indefinite(&ws.matrix).is_ok() =>
+            {
+                return Ok(rho)
+            }
+            Err(IntegratorError::NotPositiveDefinite { .. })
+                if problem.on_not_positive_definite() => {}
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// Whether the applied state is a stable stationary point: assembles the problem's
+/// matrix (with the pins as in a solve) and factorises it. `None` if it is positive
+/// definite (or too singular to tell); otherwise the curvature and, in `d`, a direction
+/// of negative curvature (zero at the control points the pins hold).
+pub(crate) fn negative_curvature(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    d: &mut Vec<Vector3<Real>>,
+) -> Result<Option<Real>, IntegratorError> {
+    let n = system.rod().len();
+    ws.resize(n, system.pins().len());
+    ws.constraints.setup(system.rod(), system.pins())?;
+    problem.matrix(system, &mut ws.matrix);
+    ws.constraints
+        .add_gram(problem.augmentation(), &mut ws.matrix);
+    ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+    let epoch = system.rod().topology_epoch();
+    if ws.solver.factor(&ws.matrix, epoch).is_ok()
+        || ws.matrix.has_far_blocks()
+        || ws.solver.factor_indefinite(&ws.matrix).is_err()
+    {
+        return Ok(None);
+    }
+    d.resize(n, Vector3::zeros());
+    let curvature = ws.solver.negative_curvature(d);
+    for k in ws.constraints.points.control_points() {
+        d[k] = Vector3::zeros();
+    }
+    Ok(curvature)
 }
 
 /// Takes the step `x += t Δx`, halving `t` until the merit decreases enough. The line
@@ -246,10 +363,9 @@ fn line_search(
     x: &mut [Vector3<Real>],
     ws: &mut NewtonWorkspace,
     enabled: bool,
+    slope: Real,
     stats: &mut StepStats,
 ) -> Result<Real, IntegratorError> {
-    // ws.r holds r − Gᵀμ; from a feasible iterate GΔx = 0, so this is r·Δx.
-    let slope: Real = ws.r.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum();
     let feasible = (0..ws.constraints.len()).all(|p| {
         let c = ws.constraints.targets[p];
         (ws.constraints.apply_row(p, x) - c).amax() <= 1e-10 * (1.0 + c.amax())

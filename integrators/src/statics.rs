@@ -10,7 +10,28 @@
 //! `K` is singular on its own; the augmented Lagrangian term \\(\rho G^T G\\) (see
 //! [`crate::newton::NewtonProblem::augmentation`]) makes the matrix definite without
 //! changing the constrained step.
+//!
+//! **Continuation.** From a start far from equilibrium (a straight rod squeezed between
+//! its pins, a fold) Newton can fail even so. The solver then restarts from the given
+//! state and follows a pseudo-transient path: implicit Euler steps from rest,
+//!
+//! \[ q_{k+1} = \arg\min_q \tfrac{1}{2h_k^2} (q - q_k)^T M (q - q_k) + E(q)
+//!     \quad\text{subject to the pins}, \]
+//!
+//! each a proximal step that lowers `E`, with `h` growing ×4 after a converged step and
+//! shrinking ×4 after a failed one; after each step a short static Newton solve is
+//! tried from the new point, and the first that converges ends the path. As \(h \to
+//! \infty\) the step becomes the static problem itself, so the path ends at an
+//! equilibrium reached by descent. The number of steps is
+//! [`StaticSolver::continuation_steps`].
+//!
+//! **Stability.** The definite Hessian hides unstable directions, so Newton can stop on
+//! an unstable equilibrium (parts of the rod held in compression). Every converged
+//! point is therefore checked with the exact Hessian (block \\(U^TDU\\), whose `D` has
+//! the Hessian's inertia); while it has negative curvature the rod is pushed along that
+//! direction and solved again, so that the solver returns a (local) minimum.
 
+use crate::incremental::{Increment, Stepper};
 use crate::linear::LinearSolverKind;
 use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::{IntegratorError, StepStats, System};
@@ -27,6 +48,9 @@ pub struct StaticParams {
     pub tolerance: Real,
     /// The factorisation of the Newton matrix. Default banded.
     pub linear_solver: LinearSolverKind,
+    /// Most pseudo-transient continuation steps after a failed Newton solve (0: none,
+    /// the failure is returned). Default 100.
+    pub max_continuation_steps: usize,
 }
 
 impl Default for StaticParams {
@@ -35,9 +59,22 @@ impl Default for StaticParams {
             max_iterations: 200,
             tolerance: 1e-12,
             linear_solver: LinearSolverKind::Banded,
+            max_continuation_steps: 100,
         }
     }
 }
+
+/// Largest move of a material point in one static Newton iteration, in rest lengths:
+/// far from equilibrium the iterates then follow a descent path instead of jumping into
+/// another basin (from the straight 0.8 m start, EA = 1e4 N, an unlimited Newton lands
+/// on a 0.5 m high arch that membrane locking makes stable; limited, on the catenary).
+const STEP_LIMIT: Real = 0.1;
+
+/// Most pushes off unstable equilibria in one solve.
+const MAX_SADDLE_ESCAPES: usize = 10;
+
+/// Newton iterations of the static solve tried after each continuation step.
+const STATIC_TRY_ITERATIONS: usize = 15;
 
 /// Finds equilibria of a [`System`] (velocities are set to zero).
 #[derive(Debug, Default)]
@@ -46,12 +83,14 @@ pub struct StaticSolver {
     pub params: StaticParams,
     workspace: NewtonWorkspace,
     x: Vec<Vector3<Real>>,
+    stepper: Stepper,
+    continuation_steps: usize,
 }
 
 impl StaticSolver {
     /// A static solver with the given settings.
     pub fn new(params: StaticParams) -> Result<Self, IntegratorError> {
-        newton_params(&params).validate()?;
+        newton_params(&params, params.max_iterations).validate()?;
         Ok(Self {
             params,
             ..Self::default()
@@ -65,27 +104,12 @@ impl StaticSolver {
             system.rod().positions.clone(),
             system.rod().velocities.clone(),
         );
-        self.x.clone_from(&system.rod().positions);
-        let mut problem = StaticProblem {
-            regularization: 1e-3,
-            rho: 0.0,
-        };
-        let params = newton_params(&self.params);
-        let result = newton::solve(
-            &mut problem,
-            system,
-            &mut self.x,
-            &params,
-            &mut self.workspace,
-        );
-        let result = match result {
-            Ok(stats) if stats.converged => Ok(stats),
-            Ok(stats) => Err(IntegratorError::NotConverged {
-                iterations: stats.newton_iterations,
-                residual: stats.residual,
-            }),
-            Err(e) => Err(e),
-        };
+        self.continuation_steps = 0;
+        let mut total = StepStats::default();
+        let result = self
+            .solve_from_here(system, &mut total)
+            .and_then(|_| self.leave_saddles(system, &mut total))
+            .map(|_| total);
         if result.is_err() {
             let rod = system.rod_mut();
             (rod.positions, rod.velocities) = saved;
@@ -93,25 +117,210 @@ impl StaticSolver {
         result
     }
 
+    /// Newton from the rod's positions, then continuation from them if Newton fails.
+    fn solve_from_here(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<(), IntegratorError> {
+        let start = system.rod().positions.clone();
+        let first = self.newton(system, self.params.max_iterations, total);
+        let recoverable = first.as_ref().map_or_else(|e| e.is_recoverable(), |ok| !ok);
+        match first {
+            Ok(true) => Ok(()),
+            _ if recoverable && self.params.max_continuation_steps > 0 => {
+                system.rod_mut().positions.clone_from(&start);
+                self.continuation(system, total)
+            }
+            Ok(false) => Err(IntegratorError::NotConverged {
+                iterations: total.newton_iterations,
+                residual: total.residual,
+            }),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The definite Hessian cannot see an unstable equilibrium (a cable squeezed
+    /// straight, an arch): at a converged point the exact Hessian is factorised, and
+    /// while it has a direction of negative curvature the rod is pushed along it (by
+    /// 1e-3 L, on the side of lower energy) and solved again. Each push counts as a
+    /// continuation step.
+    fn leave_saddles(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<(), IntegratorError> {
+        let mut direction = Vec::new();
+        for _ in 0..MAX_SADDLE_ESCAPES {
+            let mut check = StaticProblem {
+                regularization: 0.0,
+                exact: true,
+                rho: 0.0,
+            };
+            let ws = &mut self.workspace;
+            if newton::negative_curvature(&mut check, system, ws, &mut direction)?.is_none() {
+                return Ok(());
+            }
+            let largest = direction.iter().map(|v| v.amax()).fold(0.0, Real::max);
+            if largest.is_nan() || largest <= 0.0 {
+                return Ok(());
+            }
+            let kick = 1e-3 * system.rod().material().rest_length / largest;
+            let base = system.rod().positions.clone();
+            let mut best = (system.potential_energy(), 0.0);
+            for sign in [1.0, -1.0] {
+                let rod = system.rod_mut();
+                for ((q, b), d) in rod.positions.iter_mut().zip(&base).zip(&direction) {
+                    *q = b + d * (sign * kick);
+                }
+                let energy = system.potential_energy();
+                if energy < best.0 {
+                    best = (energy, sign);
+                }
+            }
+            let rod = system.rod_mut();
+            for ((q, b), d) in rod.positions.iter_mut().zip(&base).zip(&direction) {
+                *q = b + d * (best.1 * kick);
+            }
+            if best.1 == 0.0 {
+                return Ok(());
+            }
+            self.continuation_steps += 1;
+            self.solve_from_here(system, total)?;
+        }
+        Ok(())
+    }
+
+    /// Continuation steps the last solve took (0 when Newton converged directly).
+    pub fn continuation_steps(&self) -> usize {
+        self.continuation_steps
+    }
+
     /// Forces the pins exert on the rod at equilibrium, N.
     pub fn pin_forces(&self) -> &[Vector3<Real>] {
         self.workspace.multipliers()
     }
+
+    /// A static Newton solve of at most `iterations` from the rod's positions; adds its
+    /// counters to `total` and returns whether it converged.
+    fn newton(
+        &mut self,
+        system: &mut dyn System,
+        iterations: usize,
+        total: &mut StepStats,
+    ) -> Result<bool, IntegratorError> {
+        self.x.clone_from(&system.rod().positions);
+        let mut problem = StaticProblem {
+            regularization: 1e-3,
+            exact: false,
+            rho: 0.0,
+        };
+        let params = NewtonParams {
+            max_step: Some(STEP_LIMIT * system.rod().material().rest_length),
+            ..newton_params(&self.params, iterations)
+        };
+        let ws = &mut self.workspace;
+        let stats = newton::solve(&mut problem, system, &mut self.x, &params, ws);
+        if let Ok(s) = &stats {
+            add_counts(total, s);
+        }
+        Ok(stats?.converged)
+    }
+
+    /// The pseudo-transient path of the module docs, from the rod's positions.
+    fn continuation(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<(), IntegratorError> {
+        let mut h = shortest_period(system, &mut self.workspace);
+        let pseudo = NewtonParams {
+            max_iterations: 20,
+            tolerance: 1e-8,
+            accept_unconverged: true,
+            ..newton_params(&self.params, 20)
+        };
+        let mut point = system.rod().positions.clone();
+        self.stepper.definite_only = true;
+        for _ in 0..self.params.max_continuation_steps {
+            system.rod_mut().velocities.fill(Vector3::zeros());
+            self.stepper.begin(system, h)?;
+            let step = Increment { beta: h, reach: h };
+            let result = self.stepper.solve(system, &pseudo, step);
+            match self.stepper.finish(system, result) {
+                Ok(stats) => {
+                    add_counts(total, &stats);
+                    self.continuation_steps += 1;
+                    point.clone_from(&system.rod().positions);
+                    if matches!(self.newton(system, STATIC_TRY_ITERATIONS, total), Ok(true)) {
+                        return Ok(());
+                    }
+                    system.rod_mut().positions.clone_from(&point);
+                    h *= if stats.converged { 4.0 } else { 0.5 };
+                }
+                Err(e) if !e.is_recoverable() || h < 1e-300 => return Err(e),
+                Err(_) => h *= 0.25,
+            }
+        }
+        Err(IntegratorError::NotConverged {
+            iterations: total.newton_iterations,
+            residual: total.residual,
+        })
+    }
 }
 
-fn newton_params(p: &StaticParams) -> NewtonParams {
+/// Adds the counters of one solve to `total` (the last residual and convergence win).
+fn add_counts(total: &mut StepStats, s: &StepStats) {
+    total.newton_iterations += s.newton_iterations;
+    total.symbolic_analyses += s.symbolic_analyses;
+    total.line_search_cuts += s.line_search_cuts;
+    total.converged = s.converged;
+    total.residual = s.residual;
+}
+
+/// The largest diagonal entries of the stiffness (of the assembled `k_matrix`) and of
+/// the rod's mass matrix.
+fn diagonal_scales(rod: &Rod, k_matrix: &BlockBanded) -> (Real, Real) {
+    let k = (0..rod.len())
+        .map(|i| k_matrix.upper(i, 0).diagonal().amax())
+        .fold(0.0, Real::max);
+    let m = (0..rod.len())
+        .map(|i| rod.mass_matrix().get(i, i))
+        .fold(0.0, Real::max);
+    (k, m)
+}
+
+/// \(\sqrt{\max_i M_{ii} / \max_i K_{ii}}\), s: the time scale of the stiffest local
+/// motion, where continuation starts (a step this short is dominated by inertia).
+fn shortest_period(system: &dyn System, ws: &mut NewtonWorkspace) -> Real {
+    let rod = system.rod();
+    let a = ws.matrix_mut();
+    a.reset(rod.len(), rod.basis().degree());
+    system.add_potential_hessian(HessianKind::Definite, a);
+    let (k, m) = diagonal_scales(rod, a);
+    if k > 0.0 && m > 0.0 {
+        (m / k).sqrt()
+    } else {
+        1e-3
+    }
+}
+
+fn newton_params(p: &StaticParams, max_iterations: usize) -> NewtonParams {
     NewtonParams {
-        max_iterations: p.max_iterations,
+        max_iterations,
         tolerance: p.tolerance,
         line_search: true,
         linear_solver: p.linear_solver,
         max_step: None,
+        accept_unconverged: true,
     }
 }
 
 struct StaticProblem {
     /// ε relative to max diag K / max diag M.
     regularization: Real,
+    /// Use the exact Hessian (the stability check) instead of the definite one.
+    exact: bool,
     /// Augmented Lagrangian weight: the largest diagonal entry of `K` (a stiffness scale).
     rho: Real,
 }
@@ -132,13 +341,13 @@ impl NewtonProblem for StaticProblem {
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
         let rod = system.rod();
         a.reset(rod.len(), rod.basis().degree());
-        system.add_potential_hessian(HessianKind::Definite, a);
-        let k = (0..rod.len())
-            .map(|i| a.upper(i, 0).diagonal().amax())
-            .fold(0.0, Real::max);
-        let m = (0..rod.len())
-            .map(|i| rod.mass_matrix().get(i, i))
-            .fold(0.0, Real::max);
+        let kind = if self.exact {
+            HessianKind::Exact
+        } else {
+            HessianKind::Definite
+        };
+        system.add_potential_hessian(kind, a);
+        let (k, m) = diagonal_scales(rod, a);
         let k = if k > 0.0 { k } else { m };
         self.rho = k;
         if self.regularization > 0.0 {
@@ -167,8 +376,11 @@ impl NewtonProblem for StaticProblem {
         self.regularization < 1e8
     }
 
+    /// A step below the tolerance ends the solve once the regularisation is negligible
+    /// (≤ 1e-6 relative: it changes the step, not the fixed point, so it only slows the
+    /// convergence; line-search cuts at round-off level keep it from reaching zero).
     fn converged(&self, step: Real, tolerance: Real) -> bool {
-        self.regularization == 0.0 && step <= tolerance
+        self.regularization <= 1e-6 && step <= tolerance
     }
 
     fn on_step(&mut self, step_length: Real) {

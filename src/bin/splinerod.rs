@@ -137,6 +137,10 @@ fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
         "stiff catenary (EA = 1e4) settled to {:.2e} m with {} control points in {} steps, {:.3} s",
         b.stiff_catenary.1, b.stiff_catenary.0, b.stiff_catenary.2, b.stiff_catenary_settle_s
     );
+    println!(
+        "hard cases converged: {} of {}; default scene: {:.3} Newton iterations per step",
+        b.hard_cases_converged, b.hard_cases_total, b.newton_per_step_default
+    );
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(&b).map_err(|e| Error::Scene(e.to_string()))?;
         std::fs::write(&path, text).map_err(|source| Error::Io {

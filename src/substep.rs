@@ -1,0 +1,238 @@
+//! Adaptive sub-stepping: one call of [`Simulation::step`] covers its `dt` (the output
+//! interval and the largest step) with as many integrator steps as it takes.
+//!
+//! A sub-step whose Newton solve fails — stops at the iteration limit, diverges, meets
+//! a non-finite value or an indefinite matrix — is rolled back by the integrator and
+//! retried at half the length, recursively down to [`StepControl::min_dt`]; below it
+//! the whole step fails and the state is restored. After a success the length doubles
+//! again, but not back to a length that just failed until [`RECOVERY_STEPS`] sub-steps
+//! in a row succeeded (so that a step length on the edge does not fail every other
+//! time). The next call starts from the length the last one reached.
+//!
+//! **Time error control** (optional, [`StepControl::time_tolerance`] = τ, metres): after
+//! each sub-step of length `h` the local error of implicit Euler,
+//!
+//! \\[ e = \tfrac h2 \max_i \lVert v_i^+ - v_i^0 \rVert \\]
+//!
+//! (the gap between its end point and the trapezoidal one; the control-point bound holds
+//! for every material point, the basis being a partition of unity), is compared with τ:
+//! `e > τ` rejects the sub-step, and the next length is \\(h \min(2, \max(0.2,
+//! 0.9\sqrt{\tau / e}))\\) (the error is \\(O(h^2)\\) per step). For the second-order
+//! schemes it overestimates the local error, so τ is then a conservative bound.
+//!
+//! **Energy guard.** A scheme that conserves energy ([`Integrator::conserves_energy`]:
+//! the implicit midpoint rule) is not unconditionally stable for nonlinear elasticity:
+//! at long steps it can pump energy into the stiff modes until it blows up. Without
+//! grabs (the only forces that do work on a [`crate::RodSystem`] during a step) the
+//! total energy `H` must not grow, so a sub-step with
+//! \\(H^+ - H^0 > 10^{-2} (K^0 + K^+)\\) ([`ENERGY_GAIN`], `K` kinetic) is rejected and
+//! halved like a failed solve.
+//!
+//! [`Integrator::conserves_energy`]: splinerod_integrators::Integrator::conserves_energy
+
+use crate::{Error, Simulation};
+use nalgebra::Vector3;
+use splinerod_core::Real;
+use splinerod_integrators::{IntegratorError, StepStats};
+
+/// After a rejection, sub-steps in a row that must succeed before the length may grow
+/// back to the rejected one.
+pub const RECOVERY_STEPS: usize = 8;
+
+/// Energy an energy-conserving scheme may gain in one sub-step without forces doing
+/// work, relative to the kinetic energy: beyond it the step is rejected as unstable.
+pub const ENERGY_GAIN: Real = 1e-2;
+
+/// Default smallest sub-step, as a fraction of the step.
+pub const DEFAULT_MIN_DT_FRACTION: Real = 1e-6;
+
+/// Settings of the sub-stepping controller.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepControl {
+    /// Smallest sub-step, s; `None`: `dt · 1e-6` ([`DEFAULT_MIN_DT_FRACTION`]).
+    pub min_dt: Option<Real>,
+    /// Local time-discretisation error allowed per sub-step, m; `None`: no time error
+    /// control (only failed solves shorten the step).
+    pub time_tolerance: Option<Real>,
+}
+
+/// What the sub-steps of one step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SubstepCounts {
+    /// Accepted sub-steps (1 when the step was taken whole).
+    pub substeps: usize,
+    /// Sub-steps rolled back and retried shorter.
+    pub rejected: usize,
+    /// Shortest accepted sub-step, s.
+    pub smallest_dt: Real,
+}
+
+/// The controller's memory between steps.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct SubstepState {
+    /// Length to try first at the next step.
+    next: Option<Real>,
+    /// A length that failed recently: growth stays below it for a while.
+    ceiling: Option<Real>,
+    /// Sub-steps accepted since the last rejection.
+    streak: usize,
+    /// Start of the current sub-step (for a rejection by the time error test).
+    saved_q: Vec<Vector3<Real>>,
+    saved_v: Vec<Vector3<Real>>,
+}
+
+/// Whether a shorter step may cure `e`.
+fn retryable(e: &Error) -> bool {
+    matches!(e, Error::Integrator(e) if e.is_recoverable())
+}
+
+/// Adds the counters of `s` to `total`.
+fn accumulate(total: &mut StepStats, s: &StepStats) {
+    total.newton_iterations += s.newton_iterations;
+    total.symbolic_analyses += s.symbolic_analyses;
+    total.line_search_cuts += s.line_search_cuts;
+    total.converged &= s.converged;
+    total.residual = s.residual;
+}
+
+impl Simulation {
+    /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
+    /// may hold an intermediate state: the caller restores it.
+    pub(crate) fn integrate(&mut self, dt: Real) -> Result<(StepStats, SubstepCounts), Error> {
+        let min_dt = self.control.min_dt.unwrap_or(dt * DEFAULT_MIN_DT_FRACTION);
+        let mut h = self.substep.next.unwrap_or(dt).min(dt);
+        let mut total = StepStats {
+            converged: true,
+            ..StepStats::default()
+        };
+        let mut counts = SubstepCounts {
+            smallest_dt: dt,
+            ..SubstepCounts::default()
+        };
+        let mut done = 0.0;
+        while done < dt {
+            let rest = dt - done;
+            // The rest in one piece if it fits, in two equal ones if it is under 2h (no
+            // sliver of a step at the end); never longer than h.
+            let length = if rest <= h * (1.0 + 1e-12) {
+                rest
+            } else if rest < 2.0 * h {
+                0.5 * rest
+            } else {
+                h
+            };
+            let end = if length == rest {
+                self.time + dt
+            } else {
+                self.time + done + length
+            };
+            match self.try_substep(end, length) {
+                Ok((stats, error_ratio)) => {
+                    accumulate(&mut total, &stats);
+                    if error_ratio > 1.0 && 0.5 * length >= min_dt {
+                        self.reject_for_time_error();
+                        counts.rejected += 1;
+                        h = length * (0.9 / error_ratio.sqrt()).max(0.2);
+                        continue;
+                    }
+                    done = if length == rest { dt } else { done + length };
+                    counts.substeps += 1;
+                    counts.smallest_dt = counts.smallest_dt.min(length);
+                    h = self.grow(length, error_ratio).min(dt);
+                }
+                Err(e) if retryable(&e) && 0.5 * length >= min_dt => {
+                    if let Error::Integrator(IntegratorError::NotConverged { iterations, .. }) = e {
+                        total.newton_iterations += iterations;
+                    }
+                    counts.rejected += 1;
+                    self.substep.ceiling = Some(length);
+                    self.substep.streak = 0;
+                    h = 0.5 * length;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        self.substep.next = Some(h);
+        Ok((total, counts))
+    }
+
+    /// One integrator step of length `h` ending at `end`: grabs move to their targets at
+    /// `end`, contact starts its step, the integrator solves. Returns its counters and the
+    /// step's error relative to what is allowed (≤ 1: accept; see the module docs).
+    fn try_substep(&mut self, end: Real, h: Real) -> Result<(StepStats, Real), Error> {
+        let tolerance = self.control.time_tolerance;
+        let guard = self.integrator.conserves_energy() && self.system.grabs.is_empty();
+        let before = if guard {
+            self.total_energy()
+        } else {
+            (0.0, 0.0)
+        };
+        if tolerance.is_some() || guard {
+            let rod = &self.system.rod;
+            self.substep.saved_q.clone_from(&rod.positions);
+            self.substep.saved_v.clone_from(&rod.velocities);
+        }
+        self.system.time = end;
+        let rod = &self.system.rod;
+        for g in self.system.grabs.iter_mut() {
+            g.update(end, rod)?;
+        }
+        if let Some(c) = &self.system.contact {
+            c.begin_step(rod, h)?;
+        }
+        let stats = self.integrator.step(&mut self.system, h)?;
+        let mut ratio: Real = 0.0;
+        if let Some(tau) = tolerance {
+            let v = &self.system.rod.velocities;
+            let dv = v.iter().zip(&self.substep.saved_v);
+            let jump = dv.map(|(a, b)| (a - b).amax()).fold(0.0, Real::max);
+            ratio = 0.5 * h * jump / tau;
+        }
+        if guard {
+            let after = self.total_energy();
+            let gain = after.0 - before.0;
+            let allowed =
+                ENERGY_GAIN * (before.1 + after.1) + 1e-12 * (before.0.abs() + after.0.abs());
+            if gain > allowed {
+                ratio = ratio.max(4.0);
+            }
+        }
+        Ok((stats, ratio))
+    }
+
+    /// Total and kinetic energy of the system now, J.
+    fn total_energy(&self) -> (Real, Real) {
+        use splinerod_integrators::System;
+        let kinetic = self.system.rod.kinetic_energy();
+        (kinetic + self.system.potential_energy(), kinetic)
+    }
+
+    /// Restores the start of the sub-step just taken (rejected by the time error test).
+    fn reject_for_time_error(&mut self) {
+        let rod = &mut self.system.rod;
+        if rod.len() == self.substep.saved_q.len() {
+            rod.positions.copy_from_slice(&self.substep.saved_q);
+            rod.velocities.copy_from_slice(&self.substep.saved_v);
+        }
+        self.substep.streak = 0;
+    }
+
+    /// The next sub-step length after an accepted one of length `h`.
+    fn grow(&mut self, h: Real, error_ratio: Real) -> Real {
+        let s = &mut self.substep;
+        s.streak += 1;
+        if s.streak >= RECOVERY_STEPS {
+            s.ceiling = None;
+        }
+        let factor = if error_ratio > 0.0 {
+            (0.9 / error_ratio.sqrt()).clamp(0.2, 2.0)
+        } else {
+            2.0
+        };
+        let grown = h * factor;
+        match s.ceiling {
+            Some(c) if grown >= c => h.max(0.5 * c),
+            _ => grown,
+        }
+    }
+}
