@@ -320,6 +320,17 @@ pub fn hard_cases() -> Result<Vec<HardCase>, Error> {
         }
         .case("40 m/s whip")?,
         Cable {
+            method: "implicit-midpoint",
+            pin_both: false,
+            span: 1.0,
+            damping: 0.5,
+            dt: 0.01,
+            duration: 0.6,
+            extra: WHIP.into(),
+            ..base.clone()
+        }
+        .case("40 m/s whip, midpoint")?,
+        Cable {
             control_points: 12,
             pin_both: false,
             span: 1.0,
