@@ -181,13 +181,7 @@ fn stiff_catenary() -> Result<(Real, usize, Real, usize), Error> {
     while sim.time < 30.0 {
         sim.step(0.02)?;
         error = distance(&sim.system)?;
-        let speed = sim
-            .system
-            .rod
-            .velocities
-            .iter()
-            .map(|v| v.norm())
-            .fold(0.0, Real::max);
+        let speed = sim.system.rod.max_speed();
         if error <= TARGET && speed < 1e-3 {
             break;
         }

@@ -146,6 +146,15 @@ pub fn scaled(c: &Cable, lambda: f64) -> Cable {
 /// Every case of the suite (at least 25), in a fixed order.
 pub fn hard_cases() -> Result<Vec<HardCase>, Error> {
     let base = Cable::default();
+    let whip = Cable {
+        pin_both: false,
+        span: 1.0,
+        damping: 0.5,
+        dt: 0.01,
+        duration: 0.6,
+        extra: WHIP.into(),
+        ..base.clone()
+    };
     let mut cases = vec![
         Cable {
             ea: 1e7,
@@ -309,25 +318,10 @@ pub fn hard_cases() -> Result<Vec<HardCase>, Error> {
             ..base.clone()
         }
         .case("static cantilever EA 1e6")?,
-        Cable {
-            pin_both: false,
-            span: 1.0,
-            damping: 0.5,
-            dt: 0.01,
-            duration: 0.6,
-            extra: WHIP.into(),
-            ..base.clone()
-        }
-        .case("40 m/s whip")?,
+        whip.case("40 m/s whip")?,
         Cable {
             method: "implicit-midpoint",
-            pin_both: false,
-            span: 1.0,
-            damping: 0.5,
-            dt: 0.01,
-            duration: 0.6,
-            extra: WHIP.into(),
-            ..base.clone()
+            ..whip.clone()
         }
         .case("40 m/s whip, midpoint")?,
         Cable {

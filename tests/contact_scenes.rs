@@ -53,13 +53,7 @@ fn watch(scene: &Scene) -> Watch {
     };
     for _ in 0..scene.step_count() {
         let report = sim.step(dt).unwrap();
-        let fastest = sim
-            .system
-            .rod
-            .velocities
-            .iter()
-            .map(|v| v.norm())
-            .fold(0.0, Real::max);
+        let fastest = sim.system.rod.max_speed();
         // Points 2r·c apart at the step's start, each moving less than c·r, cannot meet.
         w.displacement = w.displacement.max(fastest * dt / (r * allowed));
         let contact = report.contact.unwrap();

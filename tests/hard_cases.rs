@@ -153,13 +153,7 @@ fn settled_runs_reach_the_static_equilibrium() {
         let mut settled = false;
         for _ in 0..(20.0 / dt) as usize {
             sim.step(dt).unwrap();
-            let speed = sim
-                .system
-                .rod
-                .velocities
-                .iter()
-                .map(|v| v.norm())
-                .fold(0.0, Real::max);
+            let speed = sim.system.rod.max_speed();
             if speed < 1e-10 {
                 settled = true;
                 break;

@@ -203,6 +203,15 @@ impl Rod {
         0.5 * self.mass.bilinear_vec3(&self.velocities, &self.velocities)
     }
 
+    /// Largest control-point speed, m/s: a bound on the speed of every material point
+    /// (the basis is a non-negative partition of unity).
+    pub fn max_speed(&self) -> Real {
+        self.velocities
+            .iter()
+            .map(|v| v.norm())
+            .fold(0.0, Real::max)
+    }
+
     /// Linear momentum \\(\int \mu \dot C\, ds = \sum_i m_i \dot q_i\\).
     pub fn linear_momentum(&self) -> Vector3<Real> {
         self.lumped

@@ -32,6 +32,41 @@ fn not_definite() -> IntegratorError {
     }
 }
 
+/// `(n, bandwidth)` of `a`; an error if it has far blocks, which a band cannot hold
+/// (the sparse path takes those).
+pub(crate) fn band_shape(a: &BlockBanded) -> Result<(usize, usize), IntegratorError> {
+    if a.has_far_blocks() {
+        return Err(IntegratorError::SolverState(
+            "a banded factorisation cannot hold far blocks (use the sparse path)",
+        ));
+    }
+    Ok((a.dim(), a.bandwidth()))
+}
+
+/// Empties `blocks` and refills it with `len` zero blocks (no allocation once sized).
+pub(crate) fn reset_blocks(blocks: &mut Vec<Matrix3<Real>>, len: usize) {
+    blocks.clear();
+    blocks.resize(len, Matrix3::zeros());
+}
+
+/// Runs `solve` on each right-hand side of `rhs` (columns of `3n` values), after
+/// checking that a factorisation of an `n`-block matrix is in place.
+pub(crate) fn for_each_rhs(
+    factored: bool,
+    n: usize,
+    rhs: &mut [Real],
+    solve: impl Fn(&mut [Real]),
+) -> Result<(), IntegratorError> {
+    let dofs = 3 * n;
+    if !factored || dofs == 0 || rhs.len() % dofs != 0 {
+        return Err(IntegratorError::SolverState(
+            "solve before a successful factor",
+        ));
+    }
+    rhs.chunks_exact_mut(dofs).for_each(solve);
+    Ok(())
+}
+
 impl BandedCholesky {
     /// An empty factor.
     pub fn new() -> Self {
@@ -42,17 +77,10 @@ impl BandedCholesky {
     /// [`IntegratorError::SolverState`] if `a` has far blocks, which a band cannot hold.
     pub fn factor(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
         self.factored = false;
-        if a.has_far_blocks() {
-            return Err(IntegratorError::SolverState(
-                "the banded Cholesky cannot factorise far blocks (use the sparse path)",
-            ));
-        }
-        let (n, bw) = (a.dim(), a.bandwidth());
+        let (n, bw) = band_shape(a)?;
         let w = bw + 1;
-        self.n = n;
-        self.bw = bw;
-        self.u.clear();
-        self.u.resize(n * w, Matrix3::zeros());
+        (self.n, self.bw) = (n, bw);
+        reset_blocks(&mut self.u, n * w);
         for i in 0..n {
             // Diagonal block.
             let mut s = *a.upper(i, 0);
@@ -82,16 +110,7 @@ impl BandedCholesky {
     /// Solves `A x = b` in place for `k = rhs.len() / (3n)` right-hand sides stored
     /// column after column (3 coordinates per control point).
     pub fn solve_in_place(&self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
-        let dofs = 3 * self.n;
-        if !self.factored || dofs == 0 || rhs.len() % dofs != 0 {
-            return Err(IntegratorError::SolverState(
-                "solve before a successful factor",
-            ));
-        }
-        for column in rhs.chunks_exact_mut(dofs) {
-            self.solve_one(column);
-        }
-        Ok(())
+        for_each_rhs(self.factored, self.n, rhs, |column| self.solve_one(column))
     }
 
     fn solve_one(&self, x: &mut [Real]) {

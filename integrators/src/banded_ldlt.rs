@@ -14,6 +14,7 @@
 //! the exact step (quadratic convergence, also to a saddle of the merit such as a planar
 //! state that could buckle out of plane) is still wanted; see [`crate::newton`].
 
+use crate::banded_cholesky::{band_shape, for_each_rhs, reset_blocks};
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{BlockBanded, Real};
@@ -59,20 +60,12 @@ impl BandedLdlt {
     /// block is nearly singular.
     pub fn factor(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
         self.factored = false;
-        if a.has_far_blocks() {
-            return Err(IntegratorError::SolverState(
-                "the banded LDLT cannot factorise far blocks",
-            ));
-        }
-        let (n, bw) = (a.dim(), a.bandwidth());
+        let (n, bw) = band_shape(a)?;
         let w = bw + 1;
         (self.n, self.bw) = (n, bw);
-        for buffer in [&mut self.u, &mut self.v] {
-            buffer.clear();
-            buffer.resize(n * w, Matrix3::zeros());
-        }
-        self.d_inv.clear();
-        self.d_inv.resize(n, Matrix3::zeros());
+        reset_blocks(&mut self.u, n * w);
+        reset_blocks(&mut self.v, n * w);
+        reset_blocks(&mut self.d_inv, n);
         for i in 0..n {
             let mut d = *a.upper(i, 0);
             for k in i.saturating_sub(bw)..i {
@@ -101,16 +94,7 @@ impl BandedLdlt {
     /// Solves `A x = b` in place for `k = rhs.len() / (3n)` right-hand sides stored
     /// column after column.
     pub fn solve_in_place(&self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
-        let dofs = 3 * self.n;
-        if !self.factored || dofs == 0 || rhs.len() % dofs != 0 {
-            return Err(IntegratorError::SolverState(
-                "solve before a successful factor",
-            ));
-        }
-        for column in rhs.chunks_exact_mut(dofs) {
-            self.solve_one(column);
-        }
-        Ok(())
+        for_each_rhs(self.factored, self.n, rhs, |column| self.solve_one(column))
     }
 
     /// A direction `d` of negative curvature, \\(d^T A d < 0\\), if `A` is indefinite:
