@@ -1,13 +1,18 @@
 //! BDF2, the second-order backward differentiation formula: L-stable and dissipative
 //! (it damps high frequencies strongly and low ones weakly, O((ωh)⁴) per step).
 //!
-//! \\[ q_{n+1} - \tfrac43 q_n + \tfrac13 q_{n-1} = \tfrac23 h\, v_{n+1}, \qquad
-//! M\left(v_{n+1} - \tfrac43 v_n + \tfrac13 v_{n-1}\right) = \tfrac23 h\, f(q_{n+1}, v_{n+1}), \\]
+//! With the step ratio \\(\omega = h_n / h_{n-1}\\) (1 for a constant step) the
+//! variable-step formula is
 //!
-//! with \\(f(q, v) = -\nabla E(q) - \alpha M v + G^T\lambda\\). The Newton unknown is
-//! \\(x = v_{n+1}\\); with \\(\hat q = \tfrac13(4 q_n - q_{n-1})\\),
-//! \\(\hat v = \tfrac13(4 v_n - v_{n-1})\\) and β = 2h/3, \\(q_{n+1} = \hat q + \beta x\\) and
-//! the residual
+//! \\[ q_{n+1} - \frac{(1+\omega)^2}{1+2\omega} q_n + \frac{\omega^2}{1+2\omega} q_{n-1}
+//!     = \frac{1+\omega}{1+2\omega} h_n\, v_{n+1}, \\]
+//!
+//! and the same for `M v` with \\(h_n f(q_{n+1}, v_{n+1})\\) on the right, where
+//! \\(f(q, v) = -\nabla E(q) - \alpha M v + G^T\lambda\\). For ω = 1:
+//! \\(q_{n+1} - \tfrac43 q_n + \tfrac13 q_{n-1} = \tfrac23 h v_{n+1}\\). The Newton
+//! unknown is \\(x = v_{n+1}\\); with \\(\hat q = \frac{(1+\omega)^2 q_n - \omega^2
+//! q_{n-1}}{1+2\omega}\\), \\(\hat v\\) alike and \\(\beta = \frac{1+\omega}{1+2\omega} h_n\\),
+//! \\(q_{n+1} = \hat q + \beta x\\) and the residual
 //!
 //! \\[ r(x) = M (x - \hat v) + \beta \nabla E(\hat q + \beta x) + \beta\alpha M x \\]
 //!
@@ -20,9 +25,11 @@
 //! **Start.** BDF2 needs the previous state. The first step, and any step after the
 //! history became invalid, is an implicit midpoint step ([`crate::ImplicitMidpoint`]):
 //! second order and exact for constant accelerations, so free flight stays exact. The
-//! history is invalid when `dt` changed (fixed-step coefficients), the basis changed
-//! (knot insertion or removal: the old state is in another basis) or the rod's state is
-//! not bitwise the one this integrator left (someone else moved it).
+//! history is invalid when the step ratio leaves `[1/MAX_STEP_RATIO, MAX_STEP_RATIO]`
+//! (variable-step BDF2 is zero-stable for ω < 1 + √2), the basis changed (knot
+//! insertion or removal: the old state is in another basis) or the rod's state is not
+//! bitwise the one this integrator left (someone else moved it, or a sub-step was
+//! rolled back).
 
 use crate::incremental::{Increment, Stepper};
 use crate::midpoint::midpoint_step;
@@ -30,6 +37,10 @@ use crate::newton::NewtonParams;
 use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{Real, Rod};
+
+/// Largest ratio between consecutive step lengths the history survives (zero stability
+/// of variable-step BDF2 needs ω < 1 + √2; sub-stepping changes the step by 2 or ½).
+pub const MAX_STEP_RATIO: Real = 2.0;
 
 /// BDF2 with Newton iterations and an implicit-midpoint start (an [`Integrator`]).
 #[derive(Debug, Default)]
@@ -55,8 +66,9 @@ struct History {
 impl History {
     /// Whether a BDF2 step may use the stored previous state.
     fn usable(&self, rod: &Rod, dt: Real) -> bool {
+        let ratio = dt / self.dt;
         self.valid
-            && self.dt == dt
+            && (1.0 / MAX_STEP_RATIO..=MAX_STEP_RATIO).contains(&ratio)
             && self.epoch == rod.topology_epoch()
             && self.left_q == rod.positions
             && self.left_v == rod.velocities
@@ -96,14 +108,16 @@ impl Bdf2 {
     ) -> Result<StepStats, IntegratorError> {
         let s = &mut self.stepper;
         let h = &self.history;
-        let third = 1.0 / 3.0;
-        for (b, (q, p)) in s.base_q.iter_mut().zip(s.q0.iter().zip(&h.previous_q)) {
-            *b = (q * 4.0 - p) * third;
+        let w = dt / h.dt;
+        let (a, b) = ((1.0 + w) * (1.0 + w), w * w);
+        let scale = 1.0 / (1.0 + 2.0 * w);
+        for (base, (q, p)) in s.base_q.iter_mut().zip(s.q0.iter().zip(&h.previous_q)) {
+            *base = (q * a - p * b) * scale;
         }
-        for (b, (v, p)) in s.base_v.iter_mut().zip(s.v0.iter().zip(&h.previous_v)) {
-            *b = (v * 4.0 - p) * third;
+        for (base, (v, p)) in s.base_v.iter_mut().zip(s.v0.iter().zip(&h.previous_v)) {
+            *base = (v * a - p * b) * scale;
         }
-        let beta = 2.0 * dt / 3.0;
+        let beta = (1.0 + w) * scale * dt;
         let step = Increment { beta, reach: beta };
         s.solve(system, &self.params, step)
     }
