@@ -36,6 +36,7 @@
 #[cfg(feature = "parallel")]
 pub mod bench;
 mod build;
+pub mod elastic_catenary;
 mod ensemble;
 mod error;
 mod grab;

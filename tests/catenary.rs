@@ -99,3 +99,31 @@ fn settled_dynamics_report_the_static_pin_forces() {
         }
     }
 }
+
+/// The exact elastic catenary solver reproduces the embedded reference (EA = 100 N):
+/// tension and every material point.
+#[test]
+fn exact_elastic_catenary_matches_the_reference() {
+    use splinerod::elastic_catenary::ElasticCatenary;
+    let reference = catenary_reference().expect("reference");
+    let exact = ElasticCatenary::new(1.0, 0.8, 0.1 * 9.81, 100.0).expect("solve");
+    let dh = (exact.horizontal_tension - reference.h).abs() / reference.h;
+    let worst = reference
+        .s
+        .iter()
+        .zip(&reference.xy)
+        .map(|(&s, r)| {
+            let p = exact.point(s);
+            (p[0] - r[0]).hypot(p[1] - r[1])
+        })
+        .fold(0.0, Real::max);
+    println!("H relative gap {dh:.2e}, largest point gap {worst:.2e} m");
+    assert!(dh < 1e-9 && worst < 1e-9, "H {dh:e}, points {worst:e} m");
+    // The inextensible limit: the classical catenary's length and sag.
+    let rigid = ElasticCatenary::new(1.0, 0.8, 0.981, f64::INFINITY).expect("solve");
+    let end = rigid.point(1.0);
+    assert!(
+        (end[0] - 0.8).abs() < 1e-12 && end[1].abs() < 1e-12,
+        "{end:?}"
+    );
+}

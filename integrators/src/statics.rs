@@ -6,7 +6,9 @@
 //! compressed straight rod has no transverse stiffness), so \\(\varepsilon\\) starts at
 //! `1e-3 · max diag K / max diag M`, grows ×4 whenever the line search had to cut the step
 //! and shrinks ÷10 after every full step, reaching zero: the last iterations are pure
-//! Newton and converge quadratically. Because the pins alone remove the rigid motions,
+//! Newton on the exact Hessian (by Cholesky, or by the indefinite block LDLᵀ where
+//! parts of the rod are compressed, as long as its step descends) and converge
+//! quadratically. Because the pins alone remove the rigid motions,
 //! `K` is singular on its own; the augmented Lagrangian term \\(\rho G^T G\\) (see
 //! [`crate::newton::NewtonProblem::augmentation`]) makes the matrix definite without
 //! changing the constrained step.
@@ -154,7 +156,7 @@ impl StaticSolver {
         for _ in 0..MAX_SADDLE_ESCAPES {
             let mut check = StaticProblem {
                 regularization: 0.0,
-                exact: true,
+                kind: HessianKind::Exact,
                 rho: 0.0,
             };
             let ws = &mut self.workspace;
@@ -212,7 +214,7 @@ impl StaticSolver {
         self.x.clone_from(&system.rod().positions);
         let mut problem = StaticProblem {
             regularization: 1e-3,
-            exact: false,
+            kind: HessianKind::Definite,
             rho: 0.0,
         };
         let params = NewtonParams {
@@ -319,8 +321,11 @@ fn newton_params(p: &StaticParams, max_iterations: usize) -> NewtonParams {
 struct StaticProblem {
     /// ε relative to max diag K / max diag M.
     regularization: Real,
-    /// Use the exact Hessian (the stability check) instead of the definite one.
-    exact: bool,
+    /// The Hessian of the next iteration: the definite one while regularised, the exact
+    /// one (by Cholesky or the indefinite LDLT, if it descends) once the regularisation
+    /// is negligible, so that the last iterations converge quadratically also where
+    /// parts of the rod are compressed.
+    kind: HessianKind,
     /// Augmented Lagrangian weight: the largest diagonal entry of `K` (a stiffness scale).
     rho: Real,
 }
@@ -341,12 +346,7 @@ impl NewtonProblem for StaticProblem {
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
         let rod = system.rod();
         a.reset(rod.len(), rod.basis().degree());
-        let kind = if self.exact {
-            HessianKind::Exact
-        } else {
-            HessianKind::Definite
-        };
-        system.add_potential_hessian(kind, a);
+        system.add_potential_hessian(self.kind, a);
         let (k, m) = diagonal_scales(rod, a);
         let k = if k > 0.0 { k } else { m };
         self.rho = k;
@@ -372,8 +372,16 @@ impl NewtonProblem for StaticProblem {
     }
 
     fn on_not_positive_definite(&mut self) -> bool {
+        if self.kind == HessianKind::Exact {
+            self.kind = HessianKind::Definite;
+            return true;
+        }
         self.regularization = (self.regularization * 10.0).max(1e-8);
         self.regularization < 1e8
+    }
+
+    fn indefinite_allowed(&self) -> bool {
+        self.kind == HessianKind::Exact
     }
 
     /// A step below the tolerance ends the solve once the regularisation is negligible
@@ -390,6 +398,11 @@ impl NewtonProblem for StaticProblem {
             0.0
         } else {
             self.regularization / 10.0
+        };
+        self.kind = if self.regularization <= 1e-6 {
+            HessianKind::Exact
+        } else {
+            HessianKind::Definite
         };
     }
 }
