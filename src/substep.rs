@@ -148,6 +148,7 @@ impl Simulation {
                     if let Error::Integrator(IntegratorError::NotConverged { iterations, .. }) = e {
                         total.newton_iterations += iterations;
                     }
+                    self.restore_targets();
                     counts.rejected += 1;
                     self.substep.ceiling = Some(length);
                     self.substep.streak = 0;
@@ -240,14 +241,25 @@ impl Simulation {
         (kinetic + self.system.potential_energy(), kinetic)
     }
 
-    /// Restores the start of the sub-step just taken (rejected by the time error test).
+    /// Restores the start of the sub-step just taken (rejected by the time error test or
+    /// the energy guard).
     fn reject_for_time_error(&mut self) {
         let rod = &mut self.system.rod;
         if rod.len() == self.substep.saved_q.len() {
             rod.positions.copy_from_slice(&self.substep.saved_q);
             rod.velocities.copy_from_slice(&self.substep.saved_v);
         }
+        self.restore_targets();
         self.substep.streak = 0;
+    }
+
+    /// Puts the grabs' targets back where they were at the start of the sub-step (the
+    /// energy guard measures the targets' work from there).
+    fn restore_targets(&mut self) {
+        let grabs = self.system.grabs.iter_mut();
+        for (g, t) in grabs.zip(&self.substep.targets) {
+            g.spring.target = *t;
+        }
     }
 
     /// The next sub-step length after an accepted one of length `h`.
