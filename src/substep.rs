@@ -90,15 +90,6 @@ fn retryable(e: &Error) -> bool {
     matches!(e, Error::Integrator(e) if e.is_recoverable())
 }
 
-/// Adds the counters of `s` to `total`.
-fn accumulate(total: &mut StepStats, s: &StepStats) {
-    total.newton_iterations += s.newton_iterations;
-    total.symbolic_analyses += s.symbolic_analyses;
-    total.line_search_cuts += s.line_search_cuts;
-    total.converged &= s.converged;
-    total.residual = s.residual;
-}
-
 impl Simulation {
     /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
     /// may hold an intermediate state: the caller restores it.
@@ -132,7 +123,8 @@ impl Simulation {
             };
             match self.try_substep(end, length) {
                 Ok((stats, error_ratio)) => {
-                    accumulate(&mut total, &stats);
+                    total.add_counts(&stats);
+                    total.converged &= stats.converged;
                     if error_ratio > 1.0 && 0.5 * length >= min_dt {
                         self.reject_for_time_error();
                         counts.rejected += 1;

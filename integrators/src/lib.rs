@@ -93,6 +93,17 @@ pub struct StepStats {
     pub residual: Real,
 }
 
+impl StepStats {
+    /// Adds the counters of `other` (iterations, analyses, cuts) and takes its residual;
+    /// what `converged` means for the sum is the caller's choice.
+    pub fn add_counts(&mut self, other: &StepStats) {
+        self.newton_iterations += other.newton_iterations;
+        self.symbolic_analyses += other.symbolic_analyses;
+        self.line_search_cuts += other.line_search_cuts;
+        self.residual = other.residual;
+    }
+}
+
 /// Advances a [`System`] in time.
 ///
 /// Required: [`name`](Integrator::name) and [`step`](Integrator::step). On error the

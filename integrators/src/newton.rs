@@ -288,8 +288,22 @@ fn newton_direction(
     Ok(ws.base.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum())
 }
 
-/// Assembles `A` (with the pins' augmentation and eliminations) and factorises it, as
-/// described at [`newton_direction`]; returns the augmentation weight ρ.
+/// Assembles the problem's matrix into `ws.matrix` with the pins' augmentation
+/// \\(\rho G^T G\\) and the point pins eliminated; returns ρ.
+fn assemble(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+) -> Real {
+    problem.matrix(system, &mut ws.matrix);
+    let rho = problem.augmentation();
+    ws.constraints.add_gram(rho, &mut ws.matrix);
+    ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+    rho
+}
+
+/// Assembles `A` and factorises it, as described at [`newton_direction`]; returns the
+/// augmentation weight ρ.
 fn factor_matrix(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
@@ -297,10 +311,7 @@ fn factor_matrix(
 ) -> Result<Real, IntegratorError> {
     let epoch = system.rod().topology_epoch();
     loop {
-        problem.matrix(system, &mut ws.matrix);
-        let rho = problem.augmentation();
-        ws.constraints.add_gram(rho, &mut ws.matrix);
-        ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+        let rho = assemble(problem, system, ws);
         match ws.solver.factor(&ws.matrix, epoch) {
             Ok(()) => return Ok(rho),
             Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
@@ -335,10 +346,7 @@ pub(crate) fn negative_curvature(
     let n = system.rod().len();
     ws.resize(n, system.pins().len());
     ws.constraints.setup(system.rod(), system.pins())?;
-    problem.matrix(system, &mut ws.matrix);
-    ws.constraints
-        .add_gram(problem.augmentation(), &mut ws.matrix);
-    ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+    assemble(problem, system, ws);
     let epoch = system.rod().topology_epoch();
     if ws.solver.factor(&ws.matrix, epoch).is_ok()
         || ws.matrix.has_far_blocks()

@@ -169,24 +169,20 @@ impl StaticSolver {
             }
             let kick = 1e-3 * system.rod().material().rest_length / largest;
             let base = system.rod().positions.clone();
-            let mut best = (system.potential_energy(), 0.0);
-            for sign in [1.0, -1.0] {
+            let push = |system: &mut dyn System, amount: Real| {
                 let rod = system.rod_mut();
                 for ((q, b), d) in rod.positions.iter_mut().zip(&base).zip(&direction) {
-                    *q = b + d * (sign * kick);
+                    *q = b + d * amount;
                 }
-                let energy = system.potential_energy();
-                if energy < best.0 {
-                    best = (energy, sign);
-                }
-            }
-            let rod = system.rod_mut();
-            for ((q, b), d) in rod.positions.iter_mut().zip(&base).zip(&direction) {
-                *q = b + d * (best.1 * kick);
-            }
-            if best.1 == 0.0 {
+                system.potential_energy()
+            };
+            let still = push(system, 0.0);
+            let (up, down) = (push(system, kick), push(system, -kick));
+            if up.min(down) >= still {
+                push(system, 0.0);
                 return Ok(());
             }
+            push(system, if up < down { kick } else { -kick });
             self.continuation_steps += 1;
             self.solve_from_here(system, total)?;
         }
@@ -271,13 +267,10 @@ impl StaticSolver {
     }
 }
 
-/// Adds the counters of one solve to `total` (the last residual and convergence win).
+/// Adds the counters of one solve to `total` (the last one's convergence wins).
 fn add_counts(total: &mut StepStats, s: &StepStats) {
-    total.newton_iterations += s.newton_iterations;
-    total.symbolic_analyses += s.symbolic_analyses;
-    total.line_search_cuts += s.line_search_cuts;
+    total.add_counts(s);
     total.converged = s.converged;
-    total.residual = s.residual;
 }
 
 /// The largest diagonal entries of the stiffness (of the assembled `k_matrix`) and of
