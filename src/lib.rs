@@ -43,6 +43,7 @@ mod grab;
 pub mod hard_cases;
 pub mod knot;
 mod knot_track;
+pub mod locking;
 pub mod observe;
 pub mod output;
 pub mod problems;
@@ -77,7 +78,9 @@ pub use splinerod_integrators as integrators;
 
 pub use splinerod_adaptivity::RefinementCriterion;
 pub use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
-pub use splinerod_energies::{Bending, Clamp, Energy, Gravity, PointSpring, Stretching};
+pub use splinerod_energies::{
+    Bending, Clamp, Energy, Gravity, PointSpring, StretchFormulation, Stretching,
+};
 pub use splinerod_integrators::{
     Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams, StaticParams, StaticSolver,
     System,
@@ -88,7 +91,8 @@ pub mod prelude {
     pub use crate::{
         BSplineSpace, BasisSpace, Bdf2, Bending, Clamp, Energy, Error, Grab, Gravity,
         ImplicitEuler, ImplicitMidpoint, Integrator, Material, NewtonParams, Pin, Real, Rod,
-        RodSystem, Scene, Simulation, StaticParams, StaticSolver, Stretching, System,
+        RodSystem, Scene, Simulation, StaticParams, StaticSolver, StretchFormulation, Stretching,
+        System,
     };
     pub use nalgebra::Vector3;
 }

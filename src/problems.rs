@@ -13,7 +13,7 @@ use crate::{Error, RodSystem, RunResult, Scene, Simulation};
 use nalgebra::Vector3;
 use serde::Deserialize;
 use splinerod_core::{BSplineSpace, Material, Pin, Real, Rod};
-use splinerod_energies::{Gravity, Stretching};
+use splinerod_energies::{Gravity, StretchFormulation, Stretching};
 use splinerod_integrators::Integrator;
 
 const CATENARY_JSON: &str = include_str!("../tests/data/catenary_L1_D0.8_mu0.1_EA100.json");
@@ -60,8 +60,19 @@ pub fn string_reference() -> Result<StringReference, Error> {
 /// `damping`, 41 samples (the reference's material points) and the given `[solver]`
 /// table body.
 pub fn catenary_scene(n: usize, damping: Real, solver: &str) -> Result<Scene, Error> {
+    catenary_scene_with(n, damping, solver, "mixed")
+}
+
+/// [`catenary_scene`] with `rod.stretch_formulation = formulation`.
+pub fn catenary_scene_with(
+    n: usize,
+    damping: Real,
+    solver: &str,
+    formulation: &str,
+) -> Result<Scene, Error> {
     Scene::from_toml(&format!(
         "[rod]\nrest_length = 1.0\nlinear_density = 0.1\nstretch_stiffness = 100.0\n\
+         stretch_formulation = \"{formulation}\"\n\
          damping = {damping}\ncontrol_points = {n}\nstart = [0.0, 0.0, 0.0]\n\
          end = [0.8, 0.0, 0.0]\n[[pins]]\nat = 0.0\n[[pins]]\nat = 1.0\n\
          [solver]\n{solver}\n[output]\nsamples = 41\n"
@@ -82,6 +93,11 @@ pub fn catenary_error(result: &RunResult) -> Result<Real, Error> {
 
 /// The taut string with `n` clamped cubic control points, at rest, straight.
 pub fn taut_string(n: usize) -> Result<RodSystem, Error> {
+    taut_string_with(n, StretchFormulation::default())
+}
+
+/// [`taut_string`] with the given stretching formulation.
+pub fn taut_string_with(n: usize, formulation: StretchFormulation) -> Result<RodSystem, Error> {
     let material = Material {
         rest_length: 1.0,
         linear_density: 0.1,
@@ -90,8 +106,10 @@ pub fn taut_string(n: usize) -> Result<RodSystem, Error> {
     let end = Vector3::new(1.2, 0.0, 0.0);
     let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?;
     let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
+    let mut stretching = Stretching::new(100.0)?;
+    stretching.formulation = formulation;
     Ok(RodSystem::new(rod)
-        .with_energy(Stretching::new(100.0)?)
+        .with_energy(stretching)
         .with_pin(pins[0])
         .with_pin(pins[1]))
 }
@@ -99,7 +117,12 @@ pub fn taut_string(n: usize) -> Result<RodSystem, Error> {
 /// The lowest transverse and longitudinal modes of the taut string with `n` control
 /// points (told apart by the share of motion along the string).
 pub fn string_modes(n: usize) -> Result<(Mode, Mode), Error> {
-    let modes = modal::modes(&taut_string(n)?, 12)?;
+    string_modes_with(n, StretchFormulation::default())
+}
+
+/// [`string_modes`] with the given stretching formulation.
+pub fn string_modes_with(n: usize, formulation: StretchFormulation) -> Result<(Mode, Mode), Error> {
+    let modes = modal::modes(&taut_string_with(n, formulation)?, 12)?;
     let axial = |m: &Mode| {
         let along: Real = m.shape.iter().map(|v| v.x * v.x).sum();
         along / m.shape.iter().map(|v| v.norm_squared()).sum::<Real>()
@@ -179,6 +202,16 @@ impl Pluck {
 /// `ea`), straight between pins `span` metres apart along x, under gravity: the
 /// benchmark rod (span > L starts it stretched, < L compressed).
 pub fn pinned_cable(n: usize, span: Real, ea: Real) -> Result<RodSystem, Error> {
+    pinned_cable_with(n, span, ea, StretchFormulation::default())
+}
+
+/// [`pinned_cable`] with the given stretching formulation.
+pub fn pinned_cable_with(
+    n: usize,
+    span: Real,
+    ea: Real,
+    formulation: StretchFormulation,
+) -> Result<RodSystem, Error> {
     let material = Material {
         rest_length: 1.0,
         linear_density: 0.1,
@@ -187,8 +220,10 @@ pub fn pinned_cable(n: usize, span: Real, ea: Real) -> Result<RodSystem, Error> 
     let end = Vector3::new(span, 0.0, 0.0);
     let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?;
     let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
+    let mut stretching = Stretching::new(ea)?;
+    stretching.formulation = formulation;
     Ok(RodSystem::new(rod)
-        .with_energy(Stretching::new(ea)?)
+        .with_energy(stretching)
         .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0))?)
         .with_pin(pins[0])
         .with_pin(pins[1]))

@@ -11,11 +11,23 @@
 //! * String: modal frequency errors vs control points; time-stepped first transverse
 //!   mode for each integrator: frequency error and amplitude loss per period vs dt.
 //! * Pareto: wall time against error, one curve per solver configuration.
+//! * Locking: the static catenary against the exact elastic catenary from EA = 10² to
+//!   10⁹ N for both stretching formulations, with the lumped-chain peers' EA-independent
+//!   error ([`crate::locking`]).
+//!
+//! The catenary and string sweeps use the default (mixed) stretching; the static
+//! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
+//! rod is the one `order` states.
 
+use crate::locking::{self, LockingRow};
 use crate::output::plot::{line_plot, Series};
-use crate::problems::{catenary_error, catenary_scene, pluck, string_modes, string_reference};
+use crate::problems::{
+    catenary_error, catenary_scene, catenary_scene_with, pluck, string_modes, string_reference,
+};
+use crate::scene::Scene;
 use crate::{run, Error};
 use splinerod_core::Real;
+use splinerod_energies::StretchFormulation;
 use splinerod_integrators::{Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams};
 use std::path::Path;
 
@@ -50,8 +62,14 @@ pub struct StringSample {
 pub struct Report {
     /// Static catenary, one sample per resolution.
     pub statics: Vec<Sample>,
-    /// Observed convergence order of the static catenary.
+    /// Observed convergence order of the static catenary, pointwise stretching.
     pub order: Real,
+    /// The static catenary with the pointwise stretching of the paper's eq. 12.
+    pub statics_pointwise: Vec<Sample>,
+    /// Observed convergence order of the static catenary, default (mixed) stretching.
+    pub order_mixed: Real,
+    /// The locking study: each formulation's name and rows.
+    pub locking: Vec<(&'static str, Vec<LockingRow>)>,
     /// Damped implicit Euler catenary, one sample per (dt, resolution).
     pub dynamics: Vec<Sample>,
     /// Modal frequency errors: (control points, transverse, longitudinal).
@@ -87,8 +105,17 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
     let mut report = Report::default();
     for &n in static_n {
         report.statics.push(catenary_sample(n, None, repeats)?);
+        let pointwise = static_sample(n, repeats, "pointwise")?;
+        report.statics_pointwise.push(pointwise);
     }
-    report.order = fitted_order(&report.statics);
+    report.order = fitted_order(&report.statics_pointwise);
+    report.order_mixed = fitted_order(&report.statics);
+    for (name, formulation) in [
+        ("pointwise", StretchFormulation::Pointwise),
+        ("mixed", StretchFormulation::Mixed),
+    ] {
+        report.locking.push((name, locking::study(formulation)));
+    }
     // From 8 control points: with 6, the compressed straight start can settle in an
     // upward arch (compression-resistant material, too coarse to buckle), not the catenary.
     let dynamic_n: Vec<usize> = static_n
@@ -122,6 +149,11 @@ fn rel(x: Real, exact: Real) -> Real {
     (x - exact).abs() / exact
 }
 
+fn static_sample(n: usize, repeats: usize, formulation: &str) -> Result<Sample, Error> {
+    let scene = catenary_scene_with(n, 0.0, "method = \"static\"", formulation)?;
+    timed_sample(&scene, n, None, repeats)
+}
+
 fn catenary_sample(n: usize, dt: Option<Real>, repeats: usize) -> Result<Sample, Error> {
     let scene = match dt {
         None => catenary_scene(n, 0.0, "method = \"static\"")?,
@@ -131,10 +163,20 @@ fn catenary_sample(n: usize, dt: Option<Real>, repeats: usize) -> Result<Sample,
             &format!("method = \"implicit-euler\"\ndt = {dt}\nduration = 6.0"),
         )?,
     };
+    timed_sample(&scene, n, dt, repeats)
+}
+
+/// Runs `scene` `repeats` times: its catenary error and best wall time.
+fn timed_sample(
+    scene: &Scene,
+    n: usize,
+    dt: Option<Real>,
+    repeats: usize,
+) -> Result<Sample, Error> {
     let mut best = Real::INFINITY;
     let mut error = 0.0;
     for _ in 0..repeats.max(1) {
-        let result = run(&scene)?;
+        let result = run(scene)?;
         best = best.min(result.wall_seconds);
         error = catenary_error(&result)?;
     }

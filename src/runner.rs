@@ -20,6 +20,9 @@ pub struct Samples {
     pub s: Vec<Real>,
     /// Their positions, m.
     pub positions: Vec<[Real; 3]>,
+    /// Axial tension there, N (the stretching energy's tension field; absent without one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub tension: Vec<Real>,
 }
 
 /// The trajectory of one material point.
@@ -359,6 +362,11 @@ pub(crate) fn finish(
         .iter()
         .map(|&f| rod.point(scene.material_coordinate(f)).map(Into::into))
         .collect::<Result<_, _>>()?;
+    let tension = system.tension(
+        &s.iter()
+            .map(|&f| scene.material_coordinate(f))
+            .collect::<Vec<_>>(),
+    );
     let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
     energy.extend(system.energy_breakdown());
     let l = rod.material().rest_length;
@@ -367,7 +375,11 @@ pub(crate) fn finish(
         steps: tally.steps,
         control_points: rod.len(),
         wall_seconds: tally.wall,
-        samples: Samples { s, positions },
+        samples: Samples {
+            s,
+            positions,
+            tension,
+        },
         probes: tally.probes,
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),

@@ -8,7 +8,7 @@
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
-pub use crate::scene_shape::{OverhandShape, RestShape};
+pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
 
@@ -85,6 +85,10 @@ pub struct RodSpec {
     /// or `"initial"` (the initial curve, the paper's I₀).
     #[serde(default)]
     pub rest_shape: RestShape,
+    /// How the strain enters the stretching energy: `"mixed"` (default, free of membrane
+    /// locking) or `"pointwise"` (the paper's eq. 12).
+    #[serde(default)]
+    pub stretch_formulation: StretchFormulationSpec,
 }
 
 fn default_degree() -> usize {

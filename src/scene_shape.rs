@@ -17,6 +17,27 @@ pub enum RestShape {
     Initial,
 }
 
+/// `rod.stretch_formulation`.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum StretchFormulationSpec {
+    /// The strain projected onto the degree-`d − 1` splines (locking-free; default).
+    #[default]
+    Mixed,
+    /// The strain at every quadrature point (order `d + 1` on stretchy rods; locks on
+    /// stiff ones).
+    Pointwise,
+}
+
+impl From<StretchFormulationSpec> for splinerod_energies::StretchFormulation {
+    fn from(spec: StretchFormulationSpec) -> Self {
+        match spec {
+            StretchFormulationSpec::Mixed => Self::Mixed,
+            StretchFormulationSpec::Pointwise => Self::Pointwise,
+        }
+    }
+}
+
 /// `[rod.overhand]`: the initial shape of [`crate::knot::overhand_knot`].
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -78,6 +78,21 @@ impl RodSystem {
             .chain(self.contact.iter().map(|c| c as &dyn Energy))
     }
 
+    /// Axial tension (N) at the material coordinates `s` from the energies that carry
+    /// one (stretching); empty if none does.
+    pub fn tension(&self, s: &[Real]) -> Vec<Real> {
+        let mut out = vec![0.0; s.len()];
+        let mut any = false;
+        for e in self.acting() {
+            any |= e.add_tension(&self.rod, s, &mut out);
+        }
+        if any {
+            out
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Each acting energy's name and value, in order; terms sharing a name (several
     /// grabs) are summed.
     pub fn energy_breakdown(&self) -> Vec<(String, Real)> {
@@ -128,6 +143,12 @@ impl System for RodSystem {
         for e in self.acting() {
             e.add_hessian(&self.rod, kind, hessian);
         }
+    }
+    fn hessian_bandwidth(&self) -> usize {
+        let d = self.rod.basis().degree();
+        self.acting()
+            .map(|e| e.bandwidth(&self.rod))
+            .fold(d, usize::max)
     }
     fn admissible(&self) -> bool {
         self.contact

@@ -2,11 +2,13 @@
 //! material-point positions after a static solve, the convergence order of the cubic
 //! Galerkin discretisation, and the same equilibrium reached by damped time stepping.
 
-use splinerod::problems::{catenary_error, catenary_reference, catenary_scene};
+use splinerod::problems::{
+    catenary_error, catenary_reference, catenary_scene, catenary_scene_with,
+};
 use splinerod::{run, Real};
 
-fn static_error(n: usize) -> Real {
-    let scene = catenary_scene(n, 0.0, r#"method = "static""#).expect("scene");
+fn static_error(n: usize, formulation: &str) -> Real {
+    let scene = catenary_scene_with(n, 0.0, r#"method = "static""#, formulation).expect("scene");
     let result = run(&scene).expect("static solve");
     let reference = catenary_reference().expect("reference");
     for (a, b) in result.samples.s.iter().zip(&reference.s) {
@@ -15,24 +17,38 @@ fn static_error(n: usize) -> Real {
     catenary_error(&result).expect("error")
 }
 
+/// Both formulations against the EA = 100 N reference (a stretchy rod, strain ≈ 1 %).
+/// The mixed form's lumped tension projection costs accuracy here (O(h²) where the
+/// strain varies; measured 1.45e-5 / 2.82e-6 m), the pointwise form keeps its
+/// fourth-order Galerkin error (2.07e-5 / 2.16e-7 m).
 #[test]
 fn static_catenary_matches_reference() {
-    let e16 = static_error(16);
-    let e32 = static_error(32);
-    println!("max error: 16 cps {e16:.3e} m, 32 cps {e32:.3e} m");
-    assert!(e16 <= 5e-5, "16 control points: {e16:.3e} m");
-    assert!(e32 <= 2e-6, "32 control points: {e32:.3e} m");
+    for (formulation, tol32) in [("pointwise", 2e-6), ("mixed", 5e-6)] {
+        let e16 = static_error(16, formulation);
+        let e32 = static_error(32, formulation);
+        println!("{formulation}: max error 16 cps {e16:.3e} m, 32 cps {e32:.3e} m");
+        assert!(e16 <= 5e-5, "{formulation}, 16 control points: {e16:.3e} m");
+        assert!(
+            e32 <= tol32,
+            "{formulation}, 32 control points: {e32:.3e} m"
+        );
+    }
 }
 
+/// Observed order between 12 and 24 control points: 4 for the pointwise (Galerkin)
+/// form, 2 for the mixed form on this stretchy rod (its stiff-rod order is checked in
+/// `tests/locking.rs`).
 #[test]
-fn static_catenary_converges_at_least_at_fourth_order() {
+fn static_catenary_converges_at_the_formulations_order() {
     // Knot spacing h = L / (n - d) for clamped uniform cubic knots.
     let (n1, n2) = (12, 24);
-    let (e1, e2) = (static_error(n1), static_error(n2));
     let h = |n: usize| 1.0 / (n - 3) as Real;
-    let order = (e1 / e2).ln() / (h(n1) / h(n2)).ln();
-    println!("errors {e1:.3e} -> {e2:.3e}, observed order {order:.2}");
-    assert!(order >= 4.0, "observed order {order:.2}");
+    for (formulation, least) in [("pointwise", 4.0), ("mixed", 1.9)] {
+        let (e1, e2) = (static_error(n1, formulation), static_error(n2, formulation));
+        let order = (e1 / e2).ln() / (h(n1) / h(n2)).ln();
+        println!("{formulation}: errors {e1:.3e} -> {e2:.3e}, observed order {order:.2}");
+        assert!(order >= least, "{formulation}: observed order {order:.2}");
+    }
 }
 
 #[test]

@@ -3,24 +3,34 @@
 //! simulated in time with implicit Euler (frequency and numerical amplitude loss).
 
 use splinerod::prelude::*;
-use splinerod::problems::{pluck, string_modes, string_reference};
+use splinerod::problems::{pluck, string_modes_with, string_reference};
 use std::f64::consts::PI;
 
 fn euler() -> Box<dyn Integrator> {
     Box::new(ImplicitEuler::new(NewtonParams::default()).expect("params"))
 }
 
+/// The string is stretched by 20 %: the pointwise form resolves both modes to 1e-5; the
+/// mixed form (default) keeps the transverse mode (uniform tension is exact in it) but
+/// its lumped tension projection shifts the longitudinal mode by O(h²) (measured
+/// 6.3e-3 at 16 control points) — the price of being locking-free, documented in
+/// `energies/src/stretching/mixed.rs`.
 #[test]
 fn modal_frequencies_match_the_analytic_string() {
     let r = string_reference().expect("reference");
     let (ft, fl) = (r.transverse_hz[0], r.longitudinal_hz[0]);
-    let (t, l) = string_modes(16).expect("modes");
-    let (et, el) = ((t.frequency - ft).abs() / ft, (l.frequency - fl).abs() / fl);
-    println!(
-        "16 cps: transverse {:.7} Hz (rel err {et:.2e}), longitudinal {:.7} Hz (rel err {el:.2e})",
-        t.frequency, l.frequency
-    );
-    assert!(et <= 1e-5 && el <= 1e-5);
+    for (formulation, tol_l) in [
+        (StretchFormulation::Pointwise, 1e-5),
+        (StretchFormulation::Mixed, 1e-2),
+    ] {
+        let (t, l) = string_modes_with(16, formulation).expect("modes");
+        let (et, el) = ((t.frequency - ft).abs() / ft, (l.frequency - fl).abs() / fl);
+        println!(
+            "{formulation:?}, 16 cps: transverse {:.7} Hz (rel err {et:.2e}), longitudinal {:.7} Hz (rel err {el:.2e})",
+            t.frequency, l.frequency
+        );
+        assert!(et <= 1e-5 && el <= tol_l, "{formulation:?}");
+    }
 }
 
 #[test]

@@ -303,3 +303,25 @@ impl BasisSpace for BSplineSpace {
         Box::new(self.clone())
     }
 }
+
+/// Values of the `degree + 1` B-splines of degree `degree` on `knots` that are non-zero in
+/// span `span` (`knots[span] ≤ s < knots[span + 1]`, a non-empty span), functions
+/// `span − degree ..= span` (Piegl & Tiller A2.2). Any knot vector works, also one built
+/// for a higher degree: energies use it for the degree-`d − 1` splines on a rod's knots.
+pub fn bspline_values(knots: &[Real], degree: usize, span: usize, s: Real) -> [Real; MAX_ORDER] {
+    let mut n = [0.0; MAX_ORDER];
+    let (mut left, mut right) = ([0.0; MAX_ORDER], [0.0; MAX_ORDER]);
+    n[0] = 1.0;
+    for j in 1..=degree {
+        left[j] = s - knots[span + 1 - j];
+        right[j] = knots[span + j] - s;
+        let mut saved = 0.0;
+        for r in 0..j {
+            let temp = n[r] / (right[r + 1] + left[j - r]);
+            n[r] = saved + right[r + 1] * temp;
+            saved = left[j - r] * temp;
+        }
+        n[j] = saved;
+    }
+    n
+}

@@ -8,6 +8,7 @@
 //! `m = max(d + 1, 2d − 1)`: exact for both.
 
 use crate::basis::{spans, BasisSpace, BasisValues, MAX_ORDER};
+use crate::bspline::bspline_values;
 use crate::local_update::ChangedRegion;
 use crate::{CoreError, Real};
 use std::ops::Range;
@@ -88,6 +89,10 @@ pub struct QuadPoint<'a> {
     pub d1: &'a [Real],
     /// Their second derivatives.
     pub d2: &'a [Real],
+    /// Values of the `degree` B-splines of degree `degree − 1` on the same knots that
+    /// are non-zero here (functions `first + 1 ..= first + degree`): the space the
+    /// derivative \(C'\) lives in, used by mixed (assumed-strain) energies.
+    pub lower: &'a [Real],
 }
 
 /// Basis functions tabulated at the Gauss points of every non-empty span.
@@ -104,6 +109,7 @@ pub struct QuadratureTable {
     value: Vec<Real>,
     d1: Vec<Real>,
     d2: Vec<Real>,
+    lower: Vec<Real>,
     points_per_span: usize,
 }
 
@@ -122,14 +128,17 @@ impl QuadratureTable {
             for (x, w) in rule.nodes.iter().zip(&rule.weights) {
                 let s = span.start + h * x;
                 space.evaluate(s, &mut b)?;
-                table.push(s, w * h, &b);
+                table.push(s, w * h, &b, space.knots());
             }
         }
         Ok(table)
     }
 
-    fn push(&mut self, s: Real, weight: Real, b: &BasisValues) {
+    fn push(&mut self, s: Real, weight: Real, b: &BasisValues, knots: &[Real]) {
         let o = self.order.min(MAX_ORDER);
+        let d = o - 1;
+        let lower = bspline_values(knots, d.saturating_sub(1), b.first + d, s);
+        self.lower.extend_from_slice(&lower[..d]);
         self.s.push(s);
         self.weight.push(weight);
         self.first.push(b.first as u32);
@@ -170,6 +179,7 @@ impl QuadratureTable {
             value: &self.value[range.clone()],
             d1: &self.d1[range.clone()],
             d2: &self.d2[range],
+            lower: &self.lower[p * (o - 1)..(p + 1) * (o - 1)],
         }
     }
 
@@ -201,7 +211,7 @@ impl QuadratureTable {
                 let s = t[k] + h * x;
                 space.evaluate(s, &mut b)?;
                 debug_assert_eq!(b.first, k - d);
-                fresh.push(s, w * h, &b);
+                fresh.push(s, w * h, &b, t);
             }
         }
         let shift = region.new_functions.len() as isize - region.old_functions.len() as isize;
@@ -216,6 +226,8 @@ impl QuadratureTable {
         self.value.splice(flat.clone(), fresh.value);
         self.d1.splice(flat.clone(), fresh.d1);
         self.d2.splice(flat, fresh.d2);
+        let d = o - 1;
+        self.lower.splice(old.start * d..old.end * d, fresh.lower);
         Ok(())
     }
 

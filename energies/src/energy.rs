@@ -43,6 +43,21 @@ pub trait Energy: Send + Sync {
         finite_difference_hessian(self, rod, hessian);
     }
 
+    /// Adds the axial tension (force along the centreline, N) this energy carries at the
+    /// material coordinates `s` into `out` (same length) and returns true; energies
+    /// without a tension (the default) return false.
+    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
+        let _ = (rod, s, out);
+        false
+    }
+
+    /// Block bandwidth of the Hessian: the largest distance between two control points
+    /// the energy couples (the degree `d` by default: integrals of the curve and its
+    /// derivatives couple control points that share a span).
+    fn bandwidth(&self, rod: &Rod) -> usize {
+        rod.basis().degree()
+    }
+
     /// Called after the rod's knots changed through `map`; update cached data locally.
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = (rod, map);
@@ -50,7 +65,8 @@ pub trait Energy: Send + Sync {
 }
 
 /// Central finite differences of the gradient, assembled with a colouring of the control
-/// points: points `2d + 1` apart never share a span, so one pair of gradient evaluations
+/// points: points `2w + 1` apart (`w` the energy's [`Energy::bandwidth`]) are never
+/// coupled, so one pair of gradient evaluations
 /// per colour and coordinate gives all their columns. Cost: `6(2d + 1)` gradients.
 /// Exact up to O(h²) truncation (h ≈ ε^{1/3} · L) for energies local to the B-spline band.
 pub fn finite_difference_hessian<E: Energy + ?Sized>(
@@ -59,7 +75,7 @@ pub fn finite_difference_hessian<E: Energy + ?Sized>(
     hessian: &mut BlockBanded,
 ) {
     let n = rod.len();
-    let d = rod.basis().degree();
+    let d = energy.bandwidth(rod);
     let colours = 2 * d + 1;
     let h = 6e-6 * rod.material().rest_length;
     let mut probe = rod.clone();
@@ -96,7 +112,7 @@ pub fn finite_difference_hessian<E: Energy + ?Sized>(
             if i == j {
                 block = 0.5 * (block + block.transpose());
             }
-            hessian.add_block(j, i, &block);
+            hessian.add_coupling(j, i, &block);
         }
     }
 }

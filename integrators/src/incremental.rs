@@ -68,7 +68,7 @@ impl NewtonProblem for IncrementalProblem<'_> {
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
         let rod = system.rod();
         let beta = self.step.beta;
-        a.reset(rod.len(), rod.basis().degree());
+        a.reset(rod.len(), system.hessian_bandwidth());
         system.add_potential_hessian(self.hessian, a);
         a.scale(beta * beta);
         a.add_scaled_scalar(1.0 + beta * self.alpha, rod.mass_matrix());

@@ -70,6 +70,11 @@ pub trait System: Send + Sync {
     fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]);
     /// Adds the Hessian of the potential energy (see [`HessianKind`]).
     fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded);
+    /// Block bandwidth of the potential's Hessian (the largest over the energies; the
+    /// degree by default). Newton matrices are sized with it.
+    fn hessian_bandwidth(&self) -> usize {
+        self.rod().basis().degree()
+    }
     /// Whether the current state is one Newton's line search may move to, from a state
     /// that is: a penalty is a finite barrier, and with long time steps the line search
     /// could otherwise accept strands passing through each other. Default: always.

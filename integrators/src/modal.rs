@@ -35,7 +35,7 @@ pub fn modes(system: &dyn System, count: usize) -> Result<Vec<Mode>, IntegratorE
             limit: MAX_DOFS,
         });
     }
-    let mut k = BlockBanded::zeros(n, rod.basis().degree());
+    let mut k = BlockBanded::zeros(n, system.hessian_bandwidth());
     system.add_potential_hessian(HessianKind::Exact, &mut k);
     let k = k.to_dense();
     let mut m = BlockBanded::zeros(n, rod.basis().degree());

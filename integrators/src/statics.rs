@@ -290,7 +290,7 @@ fn diagonal_scales(rod: &Rod, k_matrix: &BlockBanded) -> (Real, Real) {
 fn shortest_period(system: &dyn System, ws: &mut NewtonWorkspace) -> Real {
     let rod = system.rod();
     let a = ws.matrix_mut();
-    a.reset(rod.len(), rod.basis().degree());
+    a.reset(rod.len(), system.hessian_bandwidth());
     system.add_potential_hessian(HessianKind::Definite, a);
     let (k, m) = diagonal_scales(rod, a);
     if k > 0.0 && m > 0.0 {
@@ -338,7 +338,7 @@ impl NewtonProblem for StaticProblem {
 
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
         let rod = system.rod();
-        a.reset(rod.len(), rod.basis().degree());
+        a.reset(rod.len(), system.hessian_bandwidth());
         system.add_potential_hessian(self.kind, a);
         let (k, m) = diagonal_scales(rod, a);
         let k = if k > 0.0 { k } else { m };

@@ -24,6 +24,8 @@
 //! integrates it to its own accuracy, and \\(g_0\\) is re-tabulated after every change of
 //! knots).
 
+mod mixed;
+
 use crate::Energy;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{
@@ -31,11 +33,26 @@ use splinerod_core::{
 };
 use std::sync::Arc;
 
+/// How the strain enters the energy (see the module docs for the trade-off).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StretchFormulation {
+    /// Mixed (assumed strain): the strain is projected onto the degree-`d − 1`
+    /// B-splines on the rod's knots before it is squared ([`mixed`]). Free of membrane
+    /// locking at any `EA`; the default.
+    #[default]
+    Mixed,
+    /// The paper's eq. 12: the strain squared at every quadrature point. Converges at
+    /// order `d + 1` on stretchy rods, locks on stiff ones (`EA` ≫ the loads).
+    Pointwise,
+}
+
 /// Green–Lagrange stretching with axial stiffness `EA = Y·r` (N).
 #[derive(Debug, Clone)]
 pub struct Stretching {
     /// Axial stiffness `EA`, N.
     pub stiffness: Real,
+    /// How the strain enters the energy.
+    pub formulation: StretchFormulation,
     rest: Option<RestMetric>,
 }
 
@@ -77,6 +94,7 @@ impl Stretching {
         splinerod_core::rod::positive("stretch_stiffness", stiffness)?;
         Ok(Self {
             stiffness,
+            formulation: StretchFormulation::default(),
             rest: None,
         })
     }
@@ -100,6 +118,18 @@ impl Stretching {
     #[inline]
     fn g0(&self, p: usize) -> Real {
         self.rest.as_ref().map_or(1.0, |r| r.g0[p])
+    }
+
+    /// \\(g_0(s)\\) of the rest curve at any parameter (1 without one, or where the rest
+    /// curve cannot be evaluated).
+    fn rest_metric_at(&self, s: Real) -> Real {
+        let Some(rest) = &self.rest else { return 1.0 };
+        let (basis, points) = &*rest.curve;
+        let mut b = BasisValues::default();
+        match basis.evaluate(s, &mut b) {
+            Ok(()) => b.combine(&b.d1, points).norm_squared(),
+            Err(_) => 1.0,
+        }
     }
 
     /// Tension \\(T(\gamma) = \tfrac{EA}{2}\gamma(\gamma^2 - 1)\\) at stretch `γ`.
@@ -156,6 +186,9 @@ impl Energy for Stretching {
     }
 
     fn energy(&self, rod: &Rod) -> Real {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_energy(rod);
+        }
         let k = self.stiffness / 8.0;
         rod.quadrature()
             .points()
@@ -169,6 +202,9 @@ impl Energy for Stretching {
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_gradient(rod, gradient);
+        }
         let half = 0.5 * self.stiffness;
         for (p, qp) in rod.quadrature().points().enumerate() {
             let (c1, g0) = (tangent(&qp, &rod.positions), self.g0(p));
@@ -180,6 +216,9 @@ impl Energy for Stretching {
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_hessian(rod, kind, hessian);
+        }
         for (p, qp) in rod.quadrature().points().enumerate() {
             let c1 = tangent(&qp, &rod.positions);
             let h = self.density_hessian(&c1, self.g0(p), kind) * qp.weight;
@@ -188,6 +227,31 @@ impl Energy for Stretching {
                     hessian.add_block(qp.first + a, qp.first + b, &(h * (da * db)));
                 }
             }
+        }
+    }
+
+    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
+        if self.formulation == StretchFormulation::Mixed {
+            self.mixed_tension(rod, s, out);
+            return true;
+        }
+        let mut b = BasisValues::default();
+        for (&s, t) in s.iter().zip(out) {
+            if rod.basis().evaluate(s, &mut b).is_ok() {
+                let c1 = b.combine(&b.d1, &rod.positions);
+                let g0 = self.rest_metric_at(s);
+                let eps = 0.5 * (c1.norm_squared() - g0) / g0;
+                *t += self.stiffness * eps * c1.norm() / g0.sqrt();
+            }
+        }
+        true
+    }
+
+    fn bandwidth(&self, rod: &Rod) -> usize {
+        let d = rod.basis().degree();
+        match self.formulation {
+            StretchFormulation::Mixed => 2 * d - 1,
+            _ => d,
         }
     }
 

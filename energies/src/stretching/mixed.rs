@@ -1,0 +1,297 @@
+//! The mixed (assumed-strain) form of the stretching energy: the strain is projected
+//! onto a tension space before it is squared.
+//!
+//! With tension functions \\(\varphi_k\\) and the rest length element
+//! \\(dl_0 = \sqrt{g_0}\, ds\\), each function carries a strain moment and a weight
+//!
+//! \\[ b_k = \int \varphi_k\, \varepsilon\, dl_0, \qquad m_k = \int \varphi_k\, dl_0, \qquad
+//! \varepsilon = \frac{|C'|^2 - g_0}{2 g_0}, \\]
+//!
+//! and the energy is \\(E = \sum_k \tfrac{EA}{2}\, b_k^2 / m_k\\): a Hellinger–Reissner
+//! form whose tension \\(T = \sum_k \lambda_k \varphi_k\\), \\(\lambda_k = EA\, b_k/m_k\\),
+//! is eliminated with the lumped (row-sum) Gram matrix, so the energy stays a function of
+//! the control points alone. Its derivatives, with
+//! \\(\partial b_k/\partial q_a = \int \varphi_k\, g_0^{-1/2}\, b_a' C'\, ds\\):
+//!
+//! \\[ \frac{\partial E}{\partial q_a} = \sum_k \lambda_k \frac{\partial b_k}{\partial q_a},
+//! \qquad \frac{\partial^2 E}{\partial q_a \partial q_c} = \sum_k \frac{EA}{m_k}
+//! \frac{\partial b_k}{\partial q_a} \frac{\partial b_k}{\partial q_c}^T
+//! + \int T\, g_0^{-1/2}\, b_a' b_c'\, ds\; I. \\]
+//!
+//! [`HessianKind::Definite`] keeps the first (positive semi-definite) term and only the
+//! positive part of `T` in the second.
+//!
+//! As `EA → ∞` the energy enforces \\(b_k = 0\\) for every `k`: inextensibility held
+//! weakly, one constraint per tension function, not one per quadrature point — which is
+//! what removes membrane locking.
+
+use super::{tangent, Stretching};
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::bspline::bspline_values;
+use splinerod_core::{BasisValues, BlockBanded, HessianKind, Real, Rod, MAX_DEGREE};
+use std::cell::RefCell;
+
+/// Control points one tension function can touch: the functions of its `d` spans.
+const MAX_WIDTH: usize = 2 * MAX_DEGREE;
+
+/// Stride of [`Projection::geometric`]: pairs up to `MAX_DEGREE` apart.
+const BAND: usize = MAX_DEGREE + 1;
+
+thread_local! {
+    /// The `d` open tension functions of a sweep (scratch, reused across calls).
+    static RING: RefCell<Vec<Projection>> = const { RefCell::new(Vec::new()) };
+}
+
+/// What a sweep accumulates per tension function.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Need {
+    /// \(b_k, m_k\) only.
+    Value,
+    /// Also \(\partial b_k/\partial q\).
+    Gradient,
+    /// Also the weights \(\int \varphi_k g_0^{-1/2} b_a' b_c'\, ds\) of the geometric term.
+    Hessian,
+}
+
+/// One tension function's projection of the current strain, accumulated over its support.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Projection {
+    /// Index `j` of the tension function (B-spline `j` of degree `d − 1` on the knots).
+    pub index: usize,
+    /// Strain moment \(b_k\).
+    pub b: Real,
+    /// Weight \(m_k\), m.
+    pub m: Real,
+    /// First control point touched.
+    pub first: usize,
+    /// Number of control points touched.
+    pub width: usize,
+    /// \(\partial b_k / \partial q_{first + a}\).
+    pub db: [Vector3<Real>; MAX_WIDTH],
+    /// Upper triangle of \(\int \varphi_k g_0^{-1/2} b_a' b_c'\, ds\), row-major with
+    /// stride `MAX_WIDTH`.
+    pub geometric: [Real; MAX_WIDTH * BAND],
+}
+
+impl Projection {
+    fn empty() -> Self {
+        Self {
+            index: 0,
+            b: 0.0,
+            m: 0.0,
+            first: usize::MAX,
+            width: 0,
+            db: [Vector3::zeros(); MAX_WIDTH],
+            geometric: [0.0; MAX_WIDTH * BAND],
+        }
+    }
+
+    /// Zeroes what a sweep with `need` accumulates (the first `2d` entries).
+    fn reset(&mut self, index: usize, need: Need, d: usize) {
+        self.index = index;
+        self.b = 0.0;
+        self.m = 0.0;
+        self.first = usize::MAX;
+        self.width = 0;
+        if need != Need::Value {
+            self.db[..2 * d]
+                .iter_mut()
+                .for_each(|v| *v = Vector3::zeros());
+        }
+        if need == Need::Hessian {
+            self.geometric[..2 * d * BAND]
+                .iter_mut()
+                .for_each(|x| *x = 0.0);
+        }
+    }
+
+    /// Tension coefficient \(\lambda_k = EA\, b_k / m_k\) (0 for an empty support).
+    fn tension(&self, stiffness: Real) -> Real {
+        if self.m > 0.0 {
+            stiffness * self.b / self.m
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Stretching {
+    /// Sweeps the quadrature points once, accumulating every tension function of degree
+    /// `d − 1` (functions `1 ..= n − 1` of the rod's knot vector) and handing each to
+    /// `finish` once its support is complete. Allocation-free: the `d` open functions
+    /// live in a ring on the stack.
+    pub(super) fn sweep(&self, rod: &Rod, need: Need, finish: impl FnMut(&Projection)) {
+        RING.with(|ring| {
+            let mut ring = ring.borrow_mut();
+            let d = rod.basis().degree();
+            if ring.len() < d {
+                ring.resize(d, Projection::empty());
+            }
+            self.sweep_with(rod, need, &mut ring[..d], finish);
+        });
+    }
+
+    fn sweep_with(
+        &self,
+        rod: &Rod,
+        need: Need,
+        ring: &mut [Projection],
+        mut finish: impl FnMut(&Projection),
+    ) {
+        let (table, d) = (rod.quadrature(), rod.basis().degree());
+        // Functions below `open` are finished; `open..next` are being accumulated.
+        let (mut open, mut next) = (1, 1);
+        // The span of the previous point, and the ring slot of its first open function.
+        let (mut span, mut base) = (usize::MAX, 0);
+        for p in 0..table.len() {
+            let qp = table.point(p);
+            if qp.first + d != span {
+                span = qp.first + d;
+                while open + d <= span {
+                    if open < next && ring[open % d].width > 0 {
+                        finish(&ring[open % d]);
+                    }
+                    open += 1;
+                }
+                next = next.max(open);
+                while next <= span {
+                    ring[next % d].reset(next, need, d);
+                    next += 1;
+                }
+                base = (span + 1) % d;
+            }
+            let c1 = tangent(&qp, &rod.positions);
+            let (g0, root) = match self.g0(p) {
+                1.0 => (1.0, 1.0),
+                g0 => (g0, g0.sqrt()),
+            };
+            let eps = 0.5 * (c1.norm_squared() - g0) / g0;
+            let mut slot = base;
+            for &phi in qp.lower {
+                accumulate(&mut ring[slot], &qp, phi, eps, root, &c1, need);
+                slot = if slot + 1 == d { 0 } else { slot + 1 };
+            }
+        }
+        for j in open..next {
+            if ring[j % d].width > 0 {
+                finish(&ring[j % d]);
+            }
+        }
+    }
+
+    /// Tension \\(T(s) = \\sum_k \\lambda_k \\varphi_k(s)\\) times \\(|C'|/\\sqrt{g_0}\\) (the axial
+    /// force, N) at the parameters `s`, added into `out`.
+    pub(super) fn mixed_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) {
+        let mut lambda = vec![0.0; rod.len() + 1];
+        self.sweep(rod, Need::Value, |pr| {
+            lambda[pr.index] = pr.tension(self.stiffness)
+        });
+        let (d, knots) = (rod.basis().degree(), rod.basis().knots());
+        let mut b = BasisValues::default();
+        for (&s, t) in s.iter().zip(out) {
+            if rod.basis().evaluate(s, &mut b).is_err() {
+                continue;
+            }
+            let phi = bspline_values(knots, d - 1, b.first + d, s);
+            let field: Real = (0..d).map(|k| lambda[b.first + 1 + k] * phi[k]).sum();
+            let speed = b.combine(&b.d1, &rod.positions).norm();
+            *t += field * speed / self.rest_metric_at(s).sqrt();
+        }
+    }
+
+    /// Energy of the mixed form.
+    pub(super) fn mixed_energy(&self, rod: &Rod) -> Real {
+        let mut energy = 0.0;
+        self.sweep(rod, Need::Value, |pr| {
+            energy += 0.5 * pr.tension(self.stiffness) * pr.b;
+        });
+        energy
+    }
+
+    /// Gradient of the mixed form.
+    pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        self.sweep(rod, Need::Gradient, |pr| {
+            let lambda = pr.tension(self.stiffness);
+            for (g, db) in gradient[pr.first..].iter_mut().zip(&pr.db[..pr.width]) {
+                *g += db * lambda;
+            }
+        });
+    }
+
+    /// Hessian of the mixed form (see the module docs).
+    pub(super) fn mixed_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        self.sweep(rod, Need::Hessian, |pr| {
+            if pr.m <= 0.0 {
+                return;
+            }
+            let c = self.stiffness / pr.m;
+            let lambda = match kind {
+                HessianKind::Exact => c * pr.b,
+                _ => (c * pr.b).max(0.0),
+            };
+            for a in 0..pr.width {
+                let row = &pr.geometric[a * BAND..(a + 1) * BAND];
+                for b in a..pr.width {
+                    let mut block = pr.db[a] * pr.db[b].transpose() * c;
+                    let g = lambda * row.get(b - a).copied().unwrap_or(0.0);
+                    block[(0, 0)] += g;
+                    block[(1, 1)] += g;
+                    block[(2, 2)] += g;
+                    add_any(hessian, pr.first + a, pr.first + b, &block);
+                }
+            }
+        });
+    }
+}
+
+/// Adds one quadrature point's contribution, weighted by the tension function's value
+/// `phi` there, to that function's projection `pr`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+fn accumulate(
+    pr: &mut Projection,
+    qp: &splinerod_core::QuadPoint<'_>,
+    phi: Real,
+    eps: Real,
+    root: Real,
+    c1: &Vector3<Real>,
+    need: Need,
+) {
+    if pr.first == usize::MAX {
+        pr.first = qp.first;
+    }
+    let order = qp.d1.len();
+    let offset = qp.first - pr.first;
+    pr.width = offset + order;
+    let w = qp.weight * phi;
+    pr.b += w * eps * root;
+    pr.m += w * root;
+    if need == Need::Value {
+        return;
+    }
+    let w = w / root;
+    let f = c1 * w;
+    for (db, &da) in pr.db[offset..offset + order].iter_mut().zip(qp.d1) {
+        *db += f * da;
+    }
+    if need == Need::Hessian {
+        for (a, &da) in qp.d1.iter().enumerate() {
+            let row = &mut pr.geometric[(offset + a) * BAND..][..order - a];
+            let wa = w * da;
+            for (g, &db) in row.iter_mut().zip(&qp.d1[a..]) {
+                *g += wa * db;
+            }
+        }
+    }
+}
+
+/// Adds a block inside the band, or as a far block for a matrix sized with a narrower
+/// band than [`crate::Energy::bandwidth`] (a caller that sized it by the degree).
+#[inline]
+fn add_any(hessian: &mut BlockBanded, i: usize, j: usize, block: &Matrix3<Real>) {
+    if j - i <= hessian.bandwidth() {
+        hessian.add_block(i, j, block);
+    } else {
+        hessian.add_coupling(i, j, block);
+    }
+}

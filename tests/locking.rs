@@ -1,0 +1,102 @@
+//! Membrane locking (#12): the static catenary against the exact elastic catenary from
+//! EA = 10² to 10⁹ N, the convergence order at EA = 10⁶ N, another geometry, and the
+//! hanging nylon suture settling in time.
+
+use splinerod::elastic_catenary::ElasticCatenary;
+use splinerod::locking::{static_error, STIFFNESSES};
+use splinerod::prelude::*;
+use splinerod::run;
+
+/// At 16 control points every stiffness is within 3 × the pointwise EA = 10² N error
+/// (2.07e-5 m → 6.5e-5 m). Measured (mixed): 1.45e-5 at EA = 10², 4.25e-6 from 10⁴ on.
+#[test]
+fn sixteen_points_are_accurate_at_every_stiffness() {
+    for ea in STIFFNESSES {
+        let e = static_error(16, ea, StretchFormulation::Mixed).expect("static solve");
+        println!("EA = {ea:.0e} N: {e:.2e} m");
+        assert!(e <= 6.5e-5, "EA = {ea:e}: {e:.2e} m");
+    }
+}
+
+/// Order between 16 and 64 control points at EA = 10⁶ N, with h = L/(n − 3).
+/// Measured: 4.25e-6 → 7.59e-9 m, order 4.1.
+#[test]
+fn stiff_catenary_converges_at_fourth_order() {
+    let (e16, e64) = (
+        static_error(16, 1e6, StretchFormulation::Mixed).expect("16"),
+        static_error(64, 1e6, StretchFormulation::Mixed).expect("64"),
+    );
+    let order = (e16 / e64).ln() / (61.0 as Real / 13.0).ln();
+    println!("EA = 1e6: {e16:.2e} -> {e64:.2e} m, order {order:.2}");
+    assert!(order >= 4.0, "order {order:.2}");
+}
+
+/// A hanging cable as a scene (through the TOML path): `n` points, pins `span` apart.
+fn hanging(n: usize, length: Real, span: Real, mu: Real, ea: Real, solver: &str) -> String {
+    format!(
+        "[rod]\nrest_length = {length:e}\nlinear_density = {mu:e}\nstretch_stiffness = {ea:e}\n\
+         control_points = {n}\nstart = [0.0, 0.0, 0.0]\nend = [{span:e}, 0.0, 0.0]\n\
+         [[pins]]\nat = 0.0\n[[pins]]\nat = 1.0\n[solver]\n{solver}\n[output]\nsamples = 41\n"
+    )
+}
+
+/// Largest distance between a run's samples and the exact catenary, m.
+fn error_against(result: &splinerod::RunResult, exact: &ElasticCatenary) -> Real {
+    let l = exact.length;
+    result
+        .samples
+        .s
+        .iter()
+        .zip(&result.samples.positions)
+        .map(|(&f, p)| {
+            let q = exact.point(f * l);
+            (p[0] - q[0]).hypot(p[1] - q[1]).hypot(p[2])
+        })
+        .fold(0.0, Real::max)
+}
+
+/// Another geometry and stiffness, started straight: 2 m cable, pins 1.5 m apart,
+/// EA = 3·10⁷ N, μ = 0.5 kg/m, 16 points. Also the tension field of the JSON output
+/// against the exact H·cosh-type profile √(H² + V²).
+#[test]
+fn a_stiff_cable_from_straight_and_its_tension() {
+    let (l, span, mu, ea) = (2.0, 1.5, 0.5, 3e7);
+    let scene =
+        Scene::from_toml(&hanging(16, l, span, mu, ea, "method = \"static\"")).expect("scene");
+    let result = run(&scene).expect("static solve");
+    let exact = ElasticCatenary::new(l, span, mu * 9.81, ea).expect("exact");
+    let e = error_against(&result, &exact);
+    let worst_t = result
+        .samples
+        .s
+        .iter()
+        .zip(&result.samples.tension)
+        .map(|(&f, &t)| (t - exact.tension(f * l)).abs() / exact.tension(f * l))
+        .fold(0.0, Real::max);
+    println!("2 m cable, EA 3e7: {e:.2e} m, tension within {worst_t:.2e} relative");
+    assert!(e <= 6.5e-5 * l, "{e:.2e} m");
+    assert!(worst_t <= 1e-3, "tension {worst_t:.2e}");
+}
+
+/// The hanging nylon suture: E = 750 MPa, r = 0.2 mm (EA = Eπr² = 94.2 N), density
+/// 1140 kg/m³ (μ = 1.43e-4 kg/m), L = 0.3 m, pins 0.24 m apart, no bending; released
+/// straight, damped, dt = 1 ms. Settles within 1e-5 m of the exact elastic catenary
+/// with 16 control points and every step converged.
+#[test]
+fn hanging_suture_settles_on_its_exact_equilibrium() {
+    let r: Real = 2e-4;
+    let area = std::f64::consts::PI * r * r;
+    let (ea, mu) = (750e6 * area, 1140.0 * area);
+    let solver = "method = \"implicit-euler\"\ndt = 0.001\nduration = 3.0";
+    let text = hanging(16, 0.3, 0.24, mu, ea, solver)
+        .replace("control_points", "damping = 30.0\ncontrol_points");
+    let result = run(&Scene::from_toml(&text).expect("scene")).expect("run");
+    let exact = ElasticCatenary::new(0.3, 0.24, mu * 9.81, ea).expect("exact");
+    let e = error_against(&result, &exact);
+    println!(
+        "suture: {e:.2e} m after {} steps, kinetic {:.2e} J, {} sub-steps",
+        result.steps, result.energy["kinetic"], result.solver.substeps
+    );
+    assert_eq!(result.solver.unconverged_steps, 0);
+    assert!(e <= 1e-5, "{e:.2e} m");
+}
