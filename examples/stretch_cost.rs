@@ -56,6 +56,12 @@ fn parts_us(formulation: StretchFormulation) -> Result<[Real; 3], Error> {
 }
 
 fn main() -> Result<(), Error> {
+    if std::env::var("PROFILE_MIXED").is_ok() {
+        for _ in 0..20 {
+            step_us(StretchFormulation::Mixed)?;
+        }
+        return Ok(());
+    }
     let forms = [StretchFormulation::Pointwise, StretchFormulation::Mixed];
     let mut step = [Real::MAX; 2];
     let mut parts = [[Real::MAX; 3]; 2];

@@ -74,13 +74,18 @@ impl Scene {
         let l = rod.material().rest_length;
         let ea = self.rod.stretch_stiffness;
         let mut stretching = match self.rod.rest_shape {
-            RestShape::Arclength => Stretching::new(ea)?,
-            RestShape::Initial => Stretching::with_rest_shape(ea, &rod).map_err(|e| {
-                let reason = format!("the initial curve cannot be the rest shape: {e}");
-                Error::field("rod.rest_shape", "\"initial\"", reason)
-            })?,
+            RestShape::Arclength => Stretching::new(ea.min(Real::MAX))?,
+            RestShape::Initial => {
+                Stretching::with_rest_shape(ea.min(Real::MAX), &rod).map_err(|e| {
+                    let reason = format!("the initial curve cannot be the rest shape: {e}");
+                    Error::field("rod.rest_shape", "\"initial\"", reason)
+                })?
+            }
         };
         stretching.formulation = self.rod.stretch_formulation.into();
+        if ea == Real::INFINITY {
+            stretching.make_inextensible(&rod);
+        }
         let mut system = RodSystem::new(rod).with_energy(stretching);
         if let Some(ei) = self.rod.bending_stiffness {
             let bending = Bending::for_rod(ei, &system.rod)?;

@@ -9,7 +9,7 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use splinerod_core::Real;
 use splinerod_energies::ContactSummary;
-use splinerod_integrators::StaticSolver;
+use splinerod_integrators::{StaticSolver, StepStats};
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -56,6 +56,9 @@ pub struct SolverTotals {
     pub smallest_dt: Option<Real>,
     /// Pseudo-transient continuation steps of a static solve whose Newton failed.
     pub continuation_steps: usize,
+    /// Multiplier updates of an inextensible rod (static: until the mean strain of every
+    /// tension function is below 1e-12; dynamic: one per step).
+    pub multiplier_updates: usize,
 }
 
 /// Contact over the run (scenes with `[contact]`).
@@ -272,19 +275,52 @@ fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunR
     }
     let mut solver = StaticSolver::new(scene.static_params())?;
     let start = Instant::now();
-    let stats = solver.solve(&mut system)?;
+    let (stats, multiplier_updates) = solve_with_multipliers(&mut solver, &mut system)?;
     tally.wall = start.elapsed().as_secs_f64();
     tally.solver = SolverTotals {
         newton_iterations: stats.newton_iterations,
         symbolic_analyses: stats.symbolic_analyses,
         line_search_cuts: stats.line_search_cuts,
         continuation_steps: solver.continuation_steps(),
+        multiplier_updates,
         ..SolverTotals::default()
     };
     tally.pin_forces = solver.pin_forces().to_vec();
     tally.contact(&system)?;
     let result = finish(scene, &system, tally)?;
     notify_finish(observers, &frame(scene, &system, 0.0, 0), result)
+}
+
+/// Largest mean strain an inextensible rod's static equilibrium may keep.
+const INEXTENSIBLE_TOLERANCE: Real = 1e-12;
+
+/// Multiplier updates a static solve may take to reach it.
+const MAX_MULTIPLIER_UPDATES: usize = 40;
+
+/// The static solve, repeated with updated multipliers while a constraint (the
+/// inextensible rod) is violated by more than [`INEXTENSIBLE_TOLERANCE`]; the summed
+/// counters and the number of updates.
+fn solve_with_multipliers(
+    solver: &mut StaticSolver,
+    system: &mut RodSystem,
+) -> Result<(StepStats, usize), Error> {
+    let mut stats = solver.solve(system)?;
+    for updates in 0..MAX_MULTIPLIER_UPDATES {
+        let violation = system.update_multipliers(true);
+        if violation <= INEXTENSIBLE_TOLERANCE {
+            return Ok((stats, updates));
+        }
+        let more = solver.solve(system)?;
+        stats.add_counts(&more);
+    }
+    let violation = system.update_multipliers(true);
+    if violation <= INEXTENSIBLE_TOLERANCE {
+        return Ok((stats, MAX_MULTIPLIER_UPDATES));
+    }
+    Err(Error::Scene(format!(
+        "rod.stretch_stiffness = \"inextensible\": a mean strain of {violation:.3e} remains \
+         after {MAX_MULTIPLIER_UPDATES} multiplier updates (tolerance {INEXTENSIBLE_TOLERANCE:e})"
+    )))
 }
 
 fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunResult, Error> {

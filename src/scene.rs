@@ -55,7 +55,8 @@ pub struct RodSpec {
     pub given_rest_length: Option<f64>,
     /// Mass per unit rest length, kg/m (> 0).
     pub linear_density: f64,
-    /// Axial stiffness `EA = Y·r`, N (> 0).
+    /// Axial stiffness `EA = Y·r`, N (> 0), or `"inextensible"` (read as `+∞`).
+    #[serde(deserialize_with = "stiffness_or_inextensible")]
     pub stretch_stiffness: f64,
     /// Bending stiffness `EI`, N·m² (> 0; needs degree ≥ 2). Default: no bending energy.
     pub bending_stiffness: Option<f64>,
@@ -89,6 +90,26 @@ pub struct RodSpec {
     /// locking) or `"pointwise"` (the paper's eq. 12).
     #[serde(default)]
     pub stretch_formulation: StretchFormulationSpec,
+}
+
+/// `rod.stretch_stiffness`: a number, or the string `"inextensible"` as `+∞`.
+fn stiffness_or_inextensible<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Given {
+        Number(f64),
+        Word(String),
+    }
+    match Given::deserialize(d)? {
+        Given::Number(x) if x.is_infinite() => Err(serde::de::Error::custom(format!(
+            "rod.stretch_stiffness = {x}: must be finite and positive (or \"inextensible\")"
+        ))),
+        Given::Number(x) => Ok(x),
+        Given::Word(w) if w == "inextensible" => Ok(f64::INFINITY),
+        Given::Word(w) => Err(serde::de::Error::custom(format!(
+            "rod.stretch_stiffness: expected a number (N) or \"inextensible\", got \"{w}\""
+        ))),
+    }
 }
 
 fn default_degree() -> usize {
@@ -262,7 +283,16 @@ impl Scene {
         let r = &self.rod;
         positive("rod.rest_length", r.rest_length)?;
         positive("rod.linear_density", r.linear_density)?;
-        positive("rod.stretch_stiffness", r.stretch_stiffness)?;
+        if r.stretch_stiffness != f64::INFINITY {
+            positive("rod.stretch_stiffness", r.stretch_stiffness)?;
+        } else if r.stretch_formulation == StretchFormulationSpec::Pointwise {
+            let reason = "an inextensible rod needs the mixed formulation (its constraints live on the tension space)";
+            return Err(Error::field(
+                "rod.stretch_formulation",
+                "\"pointwise\"",
+                reason,
+            ));
+        }
         if let Some(ei) = r.bending_stiffness {
             positive("rod.bending_stiffness", ei)?;
             if r.degree < 2 {

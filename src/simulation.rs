@@ -98,6 +98,7 @@ impl Simulation {
         self.time += dt;
         self.system.time = self.time;
         self.steps += 1;
+        self.system.update_multipliers(false);
         let adapt = self.adapt()?;
         let contact = self.system.contact.as_ref();
         let contact = contact.map(|c| c.summary(&self.system.rod)).transpose()?;

@@ -78,6 +78,17 @@ impl RodSystem {
             .chain(self.contact.iter().map(|c| c as &dyn Energy))
     }
 
+    /// One multiplier update of every energy holding constraints (the inextensible
+    /// rod; see [`Energy::update_multipliers`] for `stiffen`); the largest violation
+    /// before it (0 without constraints).
+    pub fn update_multipliers(&mut self, stiffen: bool) -> Real {
+        let rod = &self.rod;
+        self.energies
+            .iter_mut()
+            .map(|e| e.update_multipliers(rod, stiffen))
+            .fold(0.0, Real::max)
+    }
+
     /// Axial tension (N) at the material coordinates `s` from the energies that carry
     /// one (stretching); empty if none does.
     pub fn tension(&self, s: &[Real]) -> Vec<Real> {

@@ -456,3 +456,24 @@ fn sub_stepping_settings_out_of_range() {
     let message = rejected(&with("accept_unconverged = 1"));
     assert!(message.contains("accept_unconverged"), "{message}");
 }
+
+#[test]
+fn stretch_formulation_and_inextensible_are_checked() {
+    let e = rejected(&with_line("[rod]", "stretch_formulation = \"reduced\""));
+    assert!(e.contains("stretch_formulation"), "{e}");
+    let e = rejected(&set("stretch_stiffness", "\"rigid\""));
+    assert!(
+        e.contains("rod.stretch_stiffness") && e.contains("inextensible"),
+        "{e}"
+    );
+    let both = with_line("[rod]", "stretch_formulation = \"pointwise\"").replace(
+        "stretch_stiffness = 100.0",
+        "stretch_stiffness = \"inextensible\"",
+    );
+    let e = rejected(&both);
+    assert!(e.contains("rod.stretch_formulation"), "{e}");
+    let fine = set("stretch_stiffness", "\"inextensible\"");
+    Scene::from_toml(&fine)
+        .and_then(|s| s.build_system().map(|_| ()))
+        .expect("an inextensible rod is a valid scene");
+}

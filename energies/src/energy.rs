@@ -51,6 +51,16 @@ pub trait Energy: Send + Sync {
         false
     }
 
+    /// For energies holding constraints by multipliers (the inextensible rod): one
+    /// method-of-multipliers update at the current state, `stiffen`ing the penalty if the
+    /// violation fell too slowly (for repeated solves of one equilibrium, not for time
+    /// steps); returns the violation before it (dimensionless). The default has no
+    /// constraints: 0.
+    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
+        let _ = (rod, stiffen);
+        0.0
+    }
+
     /// Block bandwidth of the Hessian: the largest distance between two control points
     /// the energy couples (the degree `d` by default: integrals of the curve and its
     /// derivatives couple control points that share a span).

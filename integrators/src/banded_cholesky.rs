@@ -21,7 +21,9 @@ use splinerod_core::{BlockBanded, Real};
 pub struct BandedCholesky {
     n: usize,
     bw: usize,
-    /// `U_{i,i+k}` at `i·(bw+1) + k`; the diagonal blocks hold `U_ii` (upper triangular).
+    /// `U_{i,i+k}` at `i·(bw+1) + k`, `k ≥ 1`; the diagonal slots hold \\(U_{ii}^{-T}\\)
+    /// (lower triangular), so that both the factorisation's off-diagonal blocks and the
+    /// solves multiply instead of dividing.
     u: Vec<Matrix3<Real>>,
     factored: bool,
 }
@@ -67,6 +69,16 @@ pub(crate) fn for_each_rhs(
     Ok(())
 }
 
+/// Inverse of a lower triangular 3×3 matrix with a non-zero diagonal (forward
+/// substitution written out).
+fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
+    let (a, b, c) = (1.0 / l[(0, 0)], 1.0 / l[(1, 1)], 1.0 / l[(2, 2)]);
+    let m10 = -l[(1, 0)] * a * b;
+    let m21 = -l[(2, 1)] * b * c;
+    let m20 = -(l[(2, 0)] * a + l[(2, 1)] * m10) * c;
+    Matrix3::new(a, 0.0, 0.0, m10, b, 0.0, m20, m21, c)
+}
+
 impl BandedCholesky {
     /// An empty factor.
     pub fn new() -> Self {
@@ -89,10 +101,11 @@ impl BandedCholesky {
                 s -= uki.tr_mul(&uki);
             }
             let l = s.cholesky().ok_or_else(not_definite)?.l();
-            if !l.iter().all(|x| x.is_finite()) {
+            let linv = lower_inverse(&l);
+            if !linv.iter().all(|x| x.is_finite()) {
                 return Err(not_definite());
             }
-            self.u[i * w] = l.transpose();
+            self.u[i * w] = linv;
             // Off-diagonal blocks of row i.
             for j in i + 1..(i + w).min(n) {
                 let mut m = *a.upper(i, j - i);
@@ -100,7 +113,7 @@ impl BandedCholesky {
                     m -= self.u[k * w + (i - k)].tr_mul(&self.u[k * w + (j - k)]);
                 }
                 // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
-                self.u[i * w + (j - i)] = l.solve_lower_triangular(&m).ok_or_else(not_definite)?;
+                self.u[i * w + (j - i)] = linv * m;
             }
         }
         self.factored = true;
@@ -125,11 +138,7 @@ impl BandedCholesky {
             for k in i.saturating_sub(bw)..i {
                 r -= self.u[k * w + (i - k)].tr_mul(&get(x, k));
             }
-            let y = self.u[i * w]
-                .transpose()
-                .solve_lower_triangular(&r)
-                .unwrap_or(r);
-            set(x, i, y);
+            set(x, i, self.u[i * w] * r);
         }
         // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
         for i in (0..n).rev() {
@@ -137,8 +146,7 @@ impl BandedCholesky {
             for j in i + 1..(i + w).min(n) {
                 r -= self.u[i * w + (j - i)] * get(x, j);
             }
-            let v = self.u[i * w].solve_upper_triangular(&r).unwrap_or(r);
-            set(x, i, v);
+            set(x, i, self.u[i * w].tr_mul(&r));
         }
     }
 }

@@ -86,17 +86,8 @@ const BAND: usize = MAX_DEGREE + 1;
 thread_local! {
     /// The `d` open tension functions of a sweep (scratch, reused across calls).
     static RING: RefCell<Vec<Projection>> = const { RefCell::new(Vec::new()) };
-}
-
-/// What a sweep accumulates per tension function.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Need {
-    /// \(b_k, m_k\) only.
-    Value,
-    /// Also \(\partial b_k/\partial q\).
-    Gradient,
-    /// Also the weights \(\int \varphi_k g_0^{-1/2} b_a' b_c'\, ds\) of the geometric term.
-    Hessian,
+    /// Per tension function: (λ, b), see [`Stretching::with_tensions`].
+    static TENSIONS: RefCell<Vec<(Real, Real)>> = const { RefCell::new(Vec::new()) };
 }
 
 /// One tension function's projection of the current strain, accumulated over its support.
@@ -132,32 +123,19 @@ impl Projection {
         }
     }
 
-    /// Zeroes what a sweep with `need` accumulates (the first `2d` entries).
-    fn reset(&mut self, index: usize, need: Need, d: usize) {
+    /// Zeroes what a sweep accumulates (the first `2d` entries).
+    fn reset(&mut self, index: usize, d: usize) {
         self.index = index;
         self.b = 0.0;
         self.m = 0.0;
         self.first = usize::MAX;
         self.width = 0;
-        if need != Need::Value {
-            self.db[..2 * d]
-                .iter_mut()
-                .for_each(|v| *v = Vector3::zeros());
-        }
-        if need == Need::Hessian {
-            self.geometric[..2 * d * BAND]
-                .iter_mut()
-                .for_each(|x| *x = 0.0);
-        }
-    }
-
-    /// Tension coefficient \(\lambda_k = EA\, b_k / m_k\) (0 for an empty support).
-    fn tension(&self, stiffness: Real) -> Real {
-        if self.m > 0.0 {
-            stiffness * self.b / self.m
-        } else {
-            0.0
-        }
+        self.db[..2 * d]
+            .iter_mut()
+            .for_each(|v| *v = Vector3::zeros());
+        self.geometric[..2 * d * BAND]
+            .iter_mut()
+            .for_each(|x| *x = 0.0);
     }
 }
 
@@ -166,24 +144,18 @@ impl Stretching {
     /// `d − 1` (functions `1 ..= n − 1` of the rod's knot vector) and handing each to
     /// `finish` once its support is complete. Allocation-free: the `d` open functions
     /// live in a ring on the stack.
-    pub(super) fn sweep(&self, rod: &Rod, need: Need, finish: impl FnMut(&Projection)) {
+    pub(super) fn sweep(&self, rod: &Rod, finish: impl FnMut(&Projection)) {
         RING.with(|ring| {
             let mut ring = ring.borrow_mut();
             let d = rod.basis().degree();
             if ring.len() < d {
                 ring.resize(d, Projection::empty());
             }
-            self.sweep_with(rod, need, &mut ring[..d], finish);
+            self.sweep_with(rod, &mut ring[..d], finish);
         });
     }
 
-    fn sweep_with(
-        &self,
-        rod: &Rod,
-        need: Need,
-        ring: &mut [Projection],
-        mut finish: impl FnMut(&Projection),
-    ) {
+    fn sweep_with(&self, rod: &Rod, ring: &mut [Projection], mut finish: impl FnMut(&Projection)) {
         let (table, d) = (rod.quadrature(), rod.basis().degree());
         // Functions below `open` are finished; `open..next` are being accumulated.
         let (mut open, mut next) = (1, 1);
@@ -201,20 +173,16 @@ impl Stretching {
                 }
                 next = next.max(open);
                 while next <= span {
-                    ring[next % d].reset(next, need, d);
+                    ring[next % d].reset(next, d);
                     next += 1;
                 }
                 base = (span + 1) % d;
             }
             let c1 = tangent(&qp, &rod.positions);
-            let (g0, root) = match self.g0(p) {
-                1.0 => (1.0, 1.0),
-                g0 => (g0, g0.sqrt()),
-            };
-            let eps = 0.5 * (c1.norm_squared() - g0) / g0;
+            let (eps, root) = self.strain(p, &c1);
             let mut slot = base;
             for &phi in qp.lower {
-                accumulate(&mut ring[slot], &qp, phi, eps, root, &c1, need);
+                accumulate(&mut ring[slot], &qp, phi, eps, root, &c1);
                 slot = if slot + 1 == d { 0 } else { slot + 1 };
             }
         }
@@ -225,13 +193,52 @@ impl Stretching {
         }
     }
 
+    /// Calls `f` with every tension function's coefficient \\(\\lambda_j = EA\\, b_j/m_j\\) and
+    /// its strain moment \\(b_j\\), `j = 0 ..= n` (zero outside `1 ..= n − 1` and for empty
+    /// supports). One pass over the quadrature points; the buffer is thread-local and
+    /// reused, so no allocation after the first call. `f` must not call back into it.
+    pub(super) fn with_tensions<R>(&self, rod: &Rod, f: impl FnOnce(&[(Real, Real)]) -> R) -> R {
+        TENSIONS.with(|cell| {
+            let mut moments = cell.borrow_mut();
+            moments.clear();
+            moments.resize(rod.len() + 1, (0.0, 0.0));
+            let table = rod.quadrature();
+            for p in 0..table.len() {
+                let qp = table.point(p);
+                let (eps, root) = self.strain(p, &tangent(&qp, &rod.positions));
+                let (wb, wm) = (qp.weight * eps * root, qp.weight * root);
+                // lower[k] is function first + 1 + k.
+                for (m, &phi) in moments[qp.first + 1..].iter_mut().zip(qp.lower) {
+                    m.0 += phi * wb;
+                    m.1 += phi * wm;
+                }
+            }
+            for (j, m) in moments.iter_mut().enumerate() {
+                let stretch = if m.1 > 0.0 {
+                    self.stiffness * m.0 / m.1
+                } else {
+                    0.0
+                };
+                *m = (self.multiplier(j) + stretch, m.0);
+            }
+            f(&moments)
+        })
+    }
+
+    /// Strain ε and \\(\\sqrt{g_0}\\) at quadrature point `p` with tangent `c1`.
+    #[inline]
+    fn strain(&self, p: usize, c1: &Vector3<Real>) -> (Real, Real) {
+        let (g0, root) = match self.g0(p) {
+            1.0 => (1.0, 1.0),
+            g0 => (g0, g0.sqrt()),
+        };
+        (0.5 * (c1.norm_squared() - g0) / g0, root)
+    }
+
     /// Tension \\(T(s) = \\sum_k \\lambda_k \\varphi_k(s)\\) times \\(|C'|/\\sqrt{g_0}\\) (the axial
     /// force, N) at the parameters `s`, added into `out`.
     pub(super) fn mixed_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) {
-        let mut lambda = vec![0.0; rod.len() + 1];
-        self.sweep(rod, Need::Value, |pr| {
-            lambda[pr.index] = pr.tension(self.stiffness)
-        });
+        let lambda: Vec<Real> = self.with_tensions(rod, |t| t.iter().map(|t| t.0).collect());
         let (d, knots) = (rod.basis().degree(), rod.basis().knots());
         let mut b = BasisValues::default();
         for (&s, t) in s.iter().zip(out) {
@@ -245,35 +252,50 @@ impl Stretching {
         }
     }
 
-    /// Energy of the mixed form.
+    /// Energy of the mixed form, \\(\\sum_j \\tfrac12 \\lambda_j b_j\\) (with multipliers
+    /// \\(\\sum_j (\\hat\\lambda_j + \\tfrac\\rho2 b_j/m_j) b_j = \\sum_j \\tfrac12 (\\lambda_j +
+    /// \\hat\\lambda_j) b_j\\)).
     pub(super) fn mixed_energy(&self, rod: &Rod) -> Real {
-        let mut energy = 0.0;
-        self.sweep(rod, Need::Value, |pr| {
-            energy += 0.5 * pr.tension(self.stiffness) * pr.b;
-        });
-        energy
+        self.with_tensions(rod, |t| {
+            t.iter()
+                .enumerate()
+                .map(|(j, (l, b))| 0.5 * (l + self.multiplier(j)) * b)
+                .sum()
+        })
     }
 
-    /// Gradient of the mixed form.
+    /// Gradient of the mixed form, \\(\\int T\\, g_0^{-1/2} b_a' C'\\, ds\\) with the tension
+    /// field `T` at each quadrature point.
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        self.sweep(rod, Need::Gradient, |pr| {
-            let lambda = pr.tension(self.stiffness);
-            for (g, db) in gradient[pr.first..].iter_mut().zip(&pr.db[..pr.width]) {
-                *g += db * lambda;
+        self.with_tensions(rod, |t| {
+            let table = rod.quadrature();
+            for p in 0..table.len() {
+                let qp = table.point(p);
+                let tension: Real = t[qp.first + 1..]
+                    .iter()
+                    .zip(qp.lower)
+                    .map(|(t, phi)| t.0 * phi)
+                    .sum();
+                let c1 = tangent(&qp, &rod.positions);
+                let f = c1 * (qp.weight * tension / self.g0(p).sqrt());
+                for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
+                    *g += f * da;
+                }
             }
         });
     }
 
     /// Hessian of the mixed form (see the module docs).
     pub(super) fn mixed_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
-        self.sweep(rod, Need::Hessian, |pr| {
+        self.sweep(rod, |pr| {
             if pr.m <= 0.0 {
                 return;
             }
             let c = self.stiffness / pr.m;
+            let tension = self.multiplier(pr.index) + c * pr.b;
             let lambda = match kind {
-                HessianKind::Exact => c * pr.b,
-                _ => (c * pr.b).max(0.0),
+                HessianKind::Exact => tension,
+                _ => tension.max(0.0),
             };
             for a in 0..pr.width {
                 let row = &pr.geometric[a * BAND..(a + 1) * BAND];
@@ -293,7 +315,6 @@ impl Stretching {
 /// Adds one quadrature point's contribution, weighted by the tension function's value
 /// `phi` there, to that function's projection `pr`.
 #[inline]
-#[allow(clippy::too_many_arguments)]
 fn accumulate(
     pr: &mut Projection,
     qp: &splinerod_core::QuadPoint<'_>,
@@ -301,7 +322,6 @@ fn accumulate(
     eps: Real,
     root: Real,
     c1: &Vector3<Real>,
-    need: Need,
 ) {
     if pr.first == usize::MAX {
         pr.first = qp.first;
@@ -312,21 +332,16 @@ fn accumulate(
     let w = qp.weight * phi;
     pr.b += w * eps * root;
     pr.m += w * root;
-    if need == Need::Value {
-        return;
-    }
     let w = w / root;
     let f = c1 * w;
     for (db, &da) in pr.db[offset..offset + order].iter_mut().zip(qp.d1) {
         *db += f * da;
     }
-    if need == Need::Hessian {
-        for (a, &da) in qp.d1.iter().enumerate() {
-            let row = &mut pr.geometric[(offset + a) * BAND..][..order - a];
-            let wa = w * da;
-            for (g, &db) in row.iter_mut().zip(&qp.d1[a..]) {
-                *g += wa * db;
-            }
+    for (a, &da) in qp.d1.iter().enumerate() {
+        let row = &mut pr.geometric[(offset + a) * BAND..][..order - a];
+        let wa = w * da;
+        for (g, &db) in row.iter_mut().zip(&qp.d1[a..]) {
+            *g += wa * db;
         }
     }
 }

@@ -25,6 +25,9 @@
 //! knots).
 
 mod mixed;
+mod multipliers;
+
+pub use multipliers::Multipliers;
 
 use crate::Energy;
 use nalgebra::{Matrix3, Vector3};
@@ -53,6 +56,9 @@ pub struct Stretching {
     pub stiffness: Real,
     /// How the strain enters the energy.
     pub formulation: StretchFormulation,
+    /// For an inextensible rod ([`Stretching::inextensible`]): the constraints'
+    /// multipliers; `stiffness` is then their penalty.
+    pub multipliers: Option<Multipliers>,
     rest: Option<RestMetric>,
 }
 
@@ -95,8 +101,40 @@ impl Stretching {
         Ok(Self {
             stiffness,
             formulation: StretchFormulation::default(),
+            multipliers: None,
             rest: None,
         })
+    }
+
+    /// An inextensible rod: the mixed form's constraints (every tension function's mean
+    /// strain zero) held by an augmented Lagrangian ([`Multipliers`]); call
+    /// [`Energy::update_multipliers`] after each solve or step.
+    pub fn inextensible(rod: &Rod) -> Self {
+        let mut s = Self {
+            stiffness: 1.0,
+            formulation: StretchFormulation::Mixed,
+            multipliers: None,
+            rest: None,
+        };
+        s.make_inextensible(rod);
+        s
+    }
+
+    /// Turns this energy (with its rest state) into the inextensible rod's: mixed form,
+    /// zero multipliers, `stiffness` the initial penalty.
+    pub fn make_inextensible(&mut self, rod: &Rod) {
+        let multipliers = Multipliers::new(rod);
+        self.stiffness = multipliers.penalty;
+        self.formulation = StretchFormulation::Mixed;
+        self.multipliers = Some(multipliers);
+    }
+
+    /// The multiplier \\(\\hat\\lambda_j\\) of tension function `j` (0 without multipliers).
+    #[inline]
+    fn multiplier(&self, j: usize) -> Real {
+        self.multipliers
+            .as_ref()
+            .map_or(0.0, |m| m.values.get(j).copied().unwrap_or(0.0))
     }
 
     /// Stretching energy with stiffness `EA > 0` whose rest state is the current shape of
@@ -262,5 +300,22 @@ impl Energy for Stretching {
                 rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
             }
         }
+        let rest = &self.rest;
+        if let Some(m) = &mut self.multipliers {
+            m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p]));
+        }
+    }
+
+    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
+        if self.multipliers.is_none() {
+            return 0.0;
+        }
+        let tensions: Vec<(Real, Real)> = self.with_tensions(rod, |t| t.to_vec());
+        let Some(m) = &mut self.multipliers else {
+            return 0.0;
+        };
+        let violation = m.update(&tensions, stiffen);
+        self.stiffness = m.penalty;
+        violation
     }
 }
