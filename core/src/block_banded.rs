@@ -139,7 +139,7 @@ impl BlockBanded {
     /// be symmetric. Panics outside the band (use [`add_coupling`](Self::add_coupling)
     /// for distant control points).
     #[track_caller]
-    #[inline]
+    #[inline(always)]
     pub fn add_block(&mut self, i: usize, j: usize, b: &Matrix3<Real>) {
         let w = self.bandwidth + 1;
         if i <= j {
@@ -155,6 +155,22 @@ impl BlockBanded {
             );
             self.blocks[j * w + i - j] += b.transpose();
         }
+    }
+
+    /// Adds \\(g I_3\\) at band position `(i, j)` (and `(j, i)`), `i ≤ j`: a scalar
+    /// coupling such as a geometric stiffness. Panics outside the band.
+    #[track_caller]
+    #[inline(always)]
+    pub fn add_scalar(&mut self, i: usize, j: usize, g: Real) {
+        let w = self.bandwidth + 1;
+        assert!(
+            i <= j && j - i < w && j < self.n,
+            "block ({i}, {j}) is outside the band"
+        );
+        let b = &mut self.blocks[i * w + j - i];
+        b[(0, 0)] += g;
+        b[(1, 1)] += g;
+        b[(2, 2)] += g;
     }
 
     /// Adds `b` at `(i, j)` and `bᵀ` at `(j, i)` for any pair of control points: into the

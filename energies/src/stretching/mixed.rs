@@ -80,7 +80,7 @@ use std::cell::RefCell;
 /// Control points one tension function can touch: the functions of its `d` spans.
 const MAX_WIDTH: usize = 2 * MAX_DEGREE;
 
-/// Stride of [`Projection::geometric`]: pairs up to `MAX_DEGREE` apart.
+/// Stride of the per-span geometric sums: pairs up to `MAX_DEGREE` apart.
 const BAND: usize = MAX_DEGREE + 1;
 
 thread_local! {
@@ -105,9 +105,6 @@ pub(super) struct Projection {
     pub width: usize,
     /// \(\partial b_k / \partial q_{first + a}\).
     pub db: [Vector3<Real>; MAX_WIDTH],
-    /// Upper triangle of \(\int \varphi_k g_0^{-1/2} b_a' b_c'\, ds\), row-major with
-    /// stride `MAX_WIDTH`.
-    pub geometric: [Real; MAX_WIDTH * BAND],
 }
 
 impl Projection {
@@ -119,7 +116,6 @@ impl Projection {
             first: usize::MAX,
             width: 0,
             db: [Vector3::zeros(); MAX_WIDTH],
-            geometric: [0.0; MAX_WIDTH * BAND],
         }
     }
 
@@ -133,9 +129,6 @@ impl Projection {
         self.db[..2 * d]
             .iter_mut()
             .for_each(|v| *v = Vector3::zeros());
-        self.geometric[..2 * d * BAND]
-            .iter_mut()
-            .for_each(|x| *x = 0.0);
     }
 }
 
@@ -187,9 +180,7 @@ impl Stretching {
             }
         }
         for j in open..next {
-            if ring[j % d].width > 0 {
-                finish(&ring[j % d]);
-            }
+            finish(&ring[j % d]);
         }
     }
 
@@ -228,11 +219,17 @@ impl Stretching {
     /// Strain ε and \\(\\sqrt{g_0}\\) at quadrature point `p` with tangent `c1`.
     #[inline]
     fn strain(&self, p: usize, c1: &Vector3<Real>) -> (Real, Real) {
-        let (g0, root) = match self.g0(p) {
-            1.0 => (1.0, 1.0),
-            g0 => (g0, g0.sqrt()),
-        };
-        (0.5 * (c1.norm_squared() - g0) / g0, root)
+        let g0 = self.g0(p);
+        (0.5 * (c1.norm_squared() - g0) / g0, self.root_g0(p))
+    }
+
+    /// \\(\\sqrt{g_0}\\) at quadrature point `p` (no square root for the default rest state).
+    #[inline]
+    fn root_g0(&self, p: usize) -> Real {
+        match self.g0(p) {
+            1.0 => 1.0,
+            g0 => g0.sqrt(),
+        }
     }
 
     /// Tension \\(T(s) = \\sum_k \\lambda_k \\varphi_k(s)\\) times \\(|C'|/\\sqrt{g_0}\\) (the axial
@@ -277,7 +274,7 @@ impl Stretching {
                     .map(|(t, phi)| t.0 * phi)
                     .sum();
                 let c1 = tangent(&qp, &rod.positions);
-                let f = c1 * (qp.weight * tension / self.g0(p).sqrt());
+                let f = c1 * (qp.weight * tension / self.root_g0(p));
                 for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
                     *g += f * da;
                 }
@@ -287,28 +284,69 @@ impl Stretching {
 
     /// Hessian of the mixed form (see the module docs).
     pub(super) fn mixed_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        let d = rod.basis().degree();
+        // λ of the last d finished tension functions, at j mod d.
+        let mut lambda = [0.0; MAX_DEGREE];
         self.sweep(rod, |pr| {
-            if pr.m <= 0.0 {
-                return;
-            }
-            let c = self.stiffness / pr.m;
+            let c = if pr.m > 0.0 {
+                self.stiffness / pr.m
+            } else {
+                0.0
+            };
             let tension = self.multiplier(pr.index) + c * pr.b;
-            let lambda = match kind {
+            lambda[pr.index % d] = match kind {
                 HessianKind::Exact => tension,
                 _ => tension.max(0.0),
             };
             for a in 0..pr.width {
-                let row = &pr.geometric[a * BAND..(a + 1) * BAND];
+                let u = pr.db[a] * c;
                 for b in a..pr.width {
-                    let mut block = pr.db[a] * pr.db[b].transpose() * c;
-                    let g = lambda * row.get(b - a).copied().unwrap_or(0.0);
-                    block[(0, 0)] += g;
-                    block[(1, 1)] += g;
-                    block[(2, 2)] += g;
-                    add_any(hessian, pr.first + a, pr.first + b, &block);
+                    add_any(
+                        hessian,
+                        pr.first + a,
+                        pr.first + b,
+                        &(u * pr.db[b].transpose()),
+                    );
                 }
             }
+            // Span `pr.index` has all its tension functions (index − d + 1 ..= index).
+            if pr.index >= d {
+                self.add_geometric(rod, pr.index, &lambda[..d], hessian);
+            }
         });
+    }
+
+    /// The geometric term \\(\\int T g_0^{-1/2} b_a' b_c'\\, ds\\; I\\) of knot span `span`,
+    /// with \\(T = \\sum_k \\lambda_k \\varphi_k\\) from `lambda` (function `j` at `j mod d`).
+    fn add_geometric(&self, rod: &Rod, span: usize, lambda: &[Real], hessian: &mut BlockBanded) {
+        let (table, knots, d) = (rod.quadrature(), rod.basis().knots(), lambda.len());
+        let points = table.points_in((knots[span], knots[span + 1]));
+        if points.is_empty() {
+            return;
+        }
+        let mut sum = [0.0; BAND * BAND];
+        let first = table.point(points.start).first;
+        for p in points {
+            let qp = table.point(p);
+            let mut slot = (span + 1) % d;
+            let mut tension = 0.0;
+            for &phi in qp.lower {
+                tension += lambda[slot] * phi;
+                slot = if slot + 1 == d { 0 } else { slot + 1 };
+            }
+            let w = qp.weight * tension / self.root_g0(p);
+            for (a, &da) in qp.d1.iter().enumerate() {
+                let wa = w * da;
+                for (g, &db) in sum[a * BAND..].iter_mut().zip(&qp.d1[a..]) {
+                    *g += wa * db;
+                }
+            }
+        }
+        for a in 0..=d {
+            for b in a..=d {
+                hessian.add_scalar(first + a, first + b, sum[a * BAND + b - a]);
+            }
+        }
     }
 }
 
@@ -332,17 +370,9 @@ fn accumulate(
     let w = qp.weight * phi;
     pr.b += w * eps * root;
     pr.m += w * root;
-    let w = w / root;
-    let f = c1 * w;
+    let f = c1 * (w / root);
     for (db, &da) in pr.db[offset..offset + order].iter_mut().zip(qp.d1) {
         *db += f * da;
-    }
-    for (a, &da) in qp.d1.iter().enumerate() {
-        let row = &mut pr.geometric[(offset + a) * BAND..][..order - a];
-        let wa = w * da;
-        for (g, &db) in row.iter_mut().zip(&qp.d1[a..]) {
-            *g += wa * db;
-        }
     }
 }
 
