@@ -8,8 +8,11 @@
 //! with that tension. [`Multipliers::update`] is the method-of-multipliers step
 //! \\(\hat\lambda_k \leftarrow \lambda_k\\): a static solve repeated with updated
 //! multipliers converges to \\(b_k = 0\\) (every tension function's mean strain to
-//! round-off), and in time stepping one update per step keeps the mean strain at the
-//! step's tension change over ρ. The penalty ρ only sets how fast: it starts at
+//! round-off), and in time stepping with a dissipative scheme one update per step keeps
+//! the mean strain at the step's tension change over ρ. (The facade skips the updates
+//! under the energy-conserving midpoint rule: each update moves the energy's minimum,
+//! and a scheme that does not dissipate would keep the axial ringing it starts; the
+//! penalty alone then holds the mean strain at T/ρ.) The penalty ρ only sets how fast: it starts at
 //! \\(10^6 \mu g_0 L\\) (\\(g_0\\) = 9.81 m/s², a stiffness far above the rod's weight,
 //! far below round-off trouble) and, between repeated static solves, grows tenfold (up
 //! to \\(10^6\\) times) whenever an update fails to cut the violation by four; time steps
