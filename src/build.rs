@@ -1,12 +1,12 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
-use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
+use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene, StretchFormulationSpec};
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
 use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
-use splinerod_energies::{Bending, Clamp, Gravity, Stretching};
+use splinerod_energies::{Bending, Clamp, Gravity, StretchFormulation, Stretching};
 use splinerod_integrators::{
     Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, LinearSolverKind, NewtonParams, StaticParams,
 };
@@ -65,6 +65,15 @@ impl Scene {
             }
         };
         rod.damping = r.damping;
+        // The mixed stretching needs fewer points than the default (cubic: 4, not 5);
+        // bending's rational integrand and the floor's contact samples keep the default.
+        if r.stretch_formulation == StretchFormulationSpec::Mixed
+            && r.bending_stiffness.is_none()
+            && self.contact.is_none()
+        {
+            let formulation = StretchFormulation::Mixed;
+            rod = rod.with_quadrature_points(formulation.points_per_span(r.degree))?;
+        }
         Ok(rod)
     }
 

@@ -189,3 +189,50 @@ fn other_degrees_knots_and_adaptivity_do_not_lock() {
     assert_eq!(result.solver.unconverged_steps, 0);
     assert!(e <= 1e-5, "{e:.2e} m");
 }
+
+/// The mixed form's integrands are polynomials of degree 3(d − 1): its
+/// `points_per_span` (cubic: 4) integrates them exactly, so energy and gradient agree
+/// with the default 5-point table to round-off. Fewer than degree + 1 points is refused.
+#[test]
+fn mixed_form_is_exact_with_its_own_quadrature() {
+    let basis = BSplineSpace::clamped_uniform(3, 12, 1.0).expect("basis");
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
+    let mut rod = Rod::straight(
+        material,
+        Box::new(basis),
+        Vector3::zeros(),
+        Vector3::new(0.9, 0.0, 0.0),
+    )
+    .expect("rod");
+    for (i, q) in rod.positions.iter_mut().enumerate() {
+        q.y += 0.07 * (1.3 * i as Real).sin();
+        q.z += 0.03 * (0.7 * i as Real).cos();
+    }
+    let points = StretchFormulation::Mixed.points_per_span(3);
+    assert_eq!(points, 4);
+    let lean = rod.clone().with_quadrature_points(points).expect("points");
+    let stretch = Stretching::new(1e4).expect("EA");
+    let (e5, e4) = (stretch.energy(&rod), stretch.energy(&lean));
+    let (mut g5, mut g4) = (
+        vec![Vector3::zeros(); rod.len()],
+        vec![Vector3::zeros(); rod.len()],
+    );
+    stretch.add_gradient(&rod, &mut g5);
+    stretch.add_gradient(&lean, &mut g4);
+    let scale = g5.iter().map(|g| g.amax()).fold(0.0, Real::max);
+    let dg = g5
+        .iter()
+        .zip(&g4)
+        .map(|(a, b)| (a - b).amax())
+        .fold(0.0, Real::max);
+    println!(
+        "energy {e5:.6e} vs {e4:.6e}; gradient difference {:.1e} relative",
+        dg / scale
+    );
+    assert!((e5 - e4).abs() <= 1e-12 * e5);
+    assert!(dg <= 1e-12 * scale);
+    assert!(rod.with_quadrature_points(3).is_err());
+}

@@ -12,7 +12,7 @@
 //! Knot insertion changes the basis but not the curve, its velocity, nor any of these.
 
 use crate::banded::SymBanded;
-use crate::basis::{greville, BasisSpace, BasisValues};
+use crate::basis::{greville, BasisSpace, BasisValues, MAX_DEGREE};
 use crate::knot_map::KnotMap;
 use crate::quadrature::{GaussLegendre, QuadratureTable};
 use crate::{CoreError, Real};
@@ -117,7 +117,7 @@ impl Rod {
             lumped: Vec::new(),
             topology_epoch: 0,
         };
-        rod.rebuild_caches()?;
+        rod.rebuild_caches(GaussLegendre::points_for_degree(rod.basis.degree()))?;
         Ok(rod)
     }
 
@@ -137,10 +137,27 @@ impl Rod {
         Self::new(material, basis, positions)
     }
 
-    /// Recomputes quadrature, mass matrix and lumped masses from the basis.
-    fn rebuild_caches(&mut self) -> Result<(), CoreError> {
+    /// The rod with `points` Gauss points per knot span instead of the default
+    /// [`GaussLegendre::points_for_degree`] (knot changes keep the count). At least
+    /// `degree + 1`, which the mass matrix needs to be exact; energies whose integrands
+    /// need more must be given more. Build energies with cached per-point data after this.
+    pub fn with_quadrature_points(mut self, points: usize) -> Result<Self, CoreError> {
         let d = self.basis.degree();
-        let points = GaussLegendre::points_for_degree(d);
+        if !(d + 1..=4 * (MAX_DEGREE + 1)).contains(&points) {
+            return Err(CoreError::InvalidParameter {
+                name: "quadrature points per span",
+                value: points as Real,
+                reason: "must be at least degree + 1 (the mass matrix is integrated exactly)",
+            });
+        }
+        self.rebuild_caches(points)?;
+        Ok(self)
+    }
+
+    /// Recomputes quadrature (`points` per span), mass matrix and lumped masses from the
+    /// basis.
+    fn rebuild_caches(&mut self, points: usize) -> Result<(), CoreError> {
+        let d = self.basis.degree();
         self.quadrature = QuadratureTable::new(self.basis.as_ref(), points)?;
         let n = self.basis.count();
         let mu = self.material.linear_density;

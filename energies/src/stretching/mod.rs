@@ -49,6 +49,20 @@ pub enum StretchFormulation {
     Pointwise,
 }
 
+impl StretchFormulation {
+    /// Gauss points per knot span that integrate this form's integrands (constant rest
+    /// metric) and the mass matrix exactly for degree `d`: the mixed form's are
+    /// polynomials of degree `3(d − 1)`, the pointwise form's of degree `4(d − 1)`.
+    /// Cubic: 4 and 5.
+    pub fn points_per_span(self, d: usize) -> usize {
+        let integrand = match self {
+            Self::Mixed => 3 * d.saturating_sub(1),
+            Self::Pointwise => 4 * d.saturating_sub(1),
+        };
+        (d + 1).max(integrand / 2 + 1)
+    }
+}
+
 /// Green–Lagrange stretching with axial stiffness `EA = Y·r` (N).
 #[derive(Debug, Clone)]
 pub struct Stretching {
