@@ -197,6 +197,18 @@ pub fn hard_cases() -> Result<Vec<HardCase>, Error> {
             ..base.clone()
         }
         .case("EA 1e9, dt 50 ms")?,
+        // A nylon suture: E = 750 MPa, r = 0.2 mm, 1140 kg/m³ (EA = Eπr², μ = ρπr²).
+        Cable {
+            length: 0.3,
+            span: 0.24,
+            density: 1140.0 * std::f64::consts::PI * 4e-8,
+            ea: 750e6 * std::f64::consts::PI * 4e-8,
+            damping: 30.0,
+            dt: 1e-3,
+            duration: 0.5,
+            ..base.clone()
+        }
+        .case("hanging nylon suture, dt 1 ms")?,
         Cable {
             ea: 1e9,
             dt: 0.05,

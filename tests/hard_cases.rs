@@ -1,4 +1,4 @@
-//! The hard-case suite (`splinerod::hard_cases`, 29 cases): every case runs with every
+//! The hard-case suite (`splinerod::hard_cases`, 30 cases): every case runs with every
 //! step converged (no step accepted at the Newton limit), stays finite and, for the
 //! dissipative schemes, does not gain energy; then the checks that say the converged
 //! answers are right: exact scaling between 1 mm, 1 m and 1 km, the schemes' order
