@@ -135,8 +135,9 @@ impl Projection {
 impl Stretching {
     /// Sweeps the quadrature points once, accumulating every tension function of degree
     /// `d − 1` (functions `1 ..= n − 1` of the rod's knot vector) and handing each to
-    /// `finish` once its support is complete. Allocation-free: the `d` open functions
-    /// live in a ring on the stack.
+    /// `finish` once its support is complete (in increasing order, also functions whose
+    /// support is empty, with `width` 0). Allocation-free after the first call: the `d`
+    /// open functions live in a thread-local ring.
     pub(super) fn sweep(&self, rod: &Rod, finish: impl FnMut(&Projection)) {
         RING.with(|ring| {
             let mut ring = ring.borrow_mut();
@@ -159,7 +160,7 @@ impl Stretching {
             if qp.first + d != span {
                 span = qp.first + d;
                 while open + d <= span {
-                    if open < next && ring[open % d].width > 0 {
+                    if open < next {
                         finish(&ring[open % d]);
                     }
                     open += 1;
