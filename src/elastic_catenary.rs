@@ -99,6 +99,23 @@ impl ElasticCatenary {
         self.horizontal_tension.hypot(v)
     }
 
+    /// Largest relative difference between a run's tension samples (at the fractions
+    /// `samples.s` of the rest length) and [`Self::tension`]; infinite without samples.
+    pub fn tension_error(&self, samples: &crate::runner::Samples) -> Real {
+        if samples.tension.len() != samples.s.len() || samples.s.is_empty() {
+            return Real::INFINITY;
+        }
+        samples
+            .s
+            .iter()
+            .zip(&samples.tension)
+            .map(|(&f, &t)| {
+                let exact = self.tension(f * self.length);
+                (t - exact).abs() / exact
+            })
+            .fold(0.0, Real::max)
+    }
+
     /// Position `[x, y]` of material point `s` (first pin at the origin), m.
     pub fn point(&self, s: Real) -> [Real; 2] {
         let rule = GaussLegendre::new(8);
