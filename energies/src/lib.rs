@@ -46,4 +46,4 @@ pub use contact::{Contact, ContactParams, ContactSummary};
 pub use energy::{finite_difference_hessian, Energy};
 pub use gravity::Gravity;
 pub use point_spring::PointSpring;
-pub use stretching::{StretchFormulation, Stretching};
+pub use stretching::{Multipliers, StretchFormulation, Stretching};

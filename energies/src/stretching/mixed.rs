@@ -205,12 +205,9 @@ impl Stretching {
                     m.1 += phi * wm;
                 }
             }
+            let ea = self.axial_stiffness();
             for (j, m) in moments.iter_mut().enumerate() {
-                let stretch = if m.1 > 0.0 {
-                    self.stiffness * m.0 / m.1
-                } else {
-                    0.0
-                };
+                let stretch = if m.1 > 0.0 { ea * m.0 / m.1 } else { 0.0 };
                 *m = (self.multiplier(j) + stretch, m.0);
             }
             f(&moments)
@@ -288,12 +285,9 @@ impl Stretching {
         let d = rod.basis().degree();
         // λ of the last d finished tension functions, at j mod d.
         let mut lambda = [0.0; MAX_DEGREE];
+        let ea = self.axial_stiffness();
         self.sweep(rod, |pr| {
-            let c = if pr.m > 0.0 {
-                self.stiffness / pr.m
-            } else {
-                0.0
-            };
+            let c = if pr.m > 0.0 { ea / pr.m } else { 0.0 };
             let tension = self.multiplier(pr.index) + c * pr.b;
             lambda[pr.index % d] = match kind {
                 HessianKind::Exact => tension,

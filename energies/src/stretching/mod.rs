@@ -23,6 +23,11 @@
 //! quadrature table (with a rest curve, \\(g_0^{-3/2}\\) is not polynomial: the table
 //! integrates it to its own accuracy, and \\(g_0\\) is re-tabulated after every change of
 //! knots).
+//!
+//! These are the formulas of [`StretchFormulation::Pointwise`]. The default,
+//! [`StretchFormulation::Mixed`], squares the strain only after projecting it onto the
+//! degree-`d − 1` splines ([`mixed`]: free of membrane locking), and
+//! [`Stretching::inextensible`] holds that projection at zero ([`multipliers`]).
 
 mod mixed;
 mod multipliers;
@@ -40,8 +45,8 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StretchFormulation {
     /// Mixed (assumed strain): the strain is projected onto the degree-`d − 1`
-    /// B-splines on the rod's knots before it is squared ([`mixed`]). Free of membrane
-    /// locking at any `EA`; the default.
+    /// B-splines on the rod's knots before it is squared (`stretching/mixed.rs`). Free
+    /// of membrane locking at any `EA`; the default.
     #[default]
     Mixed,
     /// The paper's eq. 12: the strain squared at every quadrature point. Converges at
@@ -71,7 +76,7 @@ pub struct Stretching {
     /// How the strain enters the energy.
     pub formulation: StretchFormulation,
     /// For an inextensible rod ([`Stretching::inextensible`]): the constraints'
-    /// multipliers; `stiffness` is then their penalty.
+    /// multipliers; their penalty then takes the place of `stiffness`.
     pub multipliers: Option<Multipliers>,
     rest: Option<RestMetric>,
 }
@@ -135,12 +140,19 @@ impl Stretching {
     }
 
     /// Turns this energy (with its rest state) into the inextensible rod's: mixed form,
-    /// zero multipliers, `stiffness` the initial penalty.
+    /// zero multipliers.
     pub fn make_inextensible(&mut self, rod: &Rod) {
-        let multipliers = Multipliers::new(rod);
-        self.stiffness = multipliers.penalty;
         self.formulation = StretchFormulation::Mixed;
-        self.multipliers = Some(multipliers);
+        self.multipliers = Some(Multipliers::new(rod));
+    }
+
+    /// The stiffness the mixed form's tension uses: `EA`, or an inextensible rod's
+    /// current penalty.
+    #[inline]
+    fn axial_stiffness(&self) -> Real {
+        self.multipliers
+            .as_ref()
+            .map_or(self.stiffness, |m| m.penalty)
     }
 
     /// The multiplier \\(\\hat\\lambda_j\\) of tension function `j` (0 without multipliers).
@@ -325,11 +337,8 @@ impl Energy for Stretching {
             return 0.0;
         }
         let tensions: Vec<(Real, Real)> = self.with_tensions(rod, |t| t.to_vec());
-        let Some(m) = &mut self.multipliers else {
-            return 0.0;
-        };
-        let violation = m.update(&tensions, stiffen);
-        self.stiffness = m.penalty;
-        violation
+        self.multipliers
+            .as_mut()
+            .map_or(0.0, |m| m.update(&tensions, stiffen))
     }
 }
