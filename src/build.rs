@@ -4,7 +4,9 @@
 use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene, StretchFormulationSpec};
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
-use splinerod_adaptivity::{AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion};
+use splinerod_adaptivity::{
+    AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion, ToleranceCriterion,
+};
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
 use splinerod_energies::{Bending, Clamp, Gravity, StretchFormulation, Stretching};
 use splinerod_integrators::{
@@ -136,26 +138,32 @@ impl Scene {
         Ok(system)
     }
 
-    /// The adapt step of `[adaptivity]`, if enabled: curvature and interaction criteria.
+    /// The adapt step of `[adaptivity]`, if enabled: the interaction criterion and either
+    /// the tolerance criterion (default) or the paper's curvature criterion.
     pub fn adapter(&self) -> Result<Option<Adapter>, Error> {
         let Some(a) = self.adaptivity.as_ref().filter(|a| a.enabled) else {
             return Ok(None);
         };
         let l = self.rod.rest_length;
+        let tolerance = a.tolerance_for(l);
+        let default_shape = if a.uses_curvature() { 1e-6 } else { 0.25 * tolerance };
         let params = AdaptParams {
             max_control_points: a.max_control_points,
             min_control_points: a.min_control_points.unwrap_or(self.rod.control_points),
             min_span: a.min_span * l,
-            shape_tolerance: a.shape_tolerance,
+            shape_tolerance: a.shape_tolerance.unwrap_or(default_shape),
             hysteresis_steps: a.hysteresis_steps,
             ..AdaptParams::default()
         };
-        let curvature = CurvatureCriterion::new(a.insert_threshold, a.remove_threshold)?;
         let interaction = InteractionCriterion::new(a.interaction_radius * l)?
             .with_multiplicity(a.interaction_multiplicity)?;
-        Ok(Some(
-            Adapter::new(params)?.with(interaction).with(curvature),
-        ))
+        let adapter = Adapter::new(params)?.with(interaction);
+        Ok(Some(if a.uses_curvature() {
+            let (insert, remove) = a.thresholds();
+            adapter.with(CurvatureCriterion::new(insert, remove)?)
+        } else {
+            adapter.with(ToleranceCriterion::new(tolerance)?)
+        }))
     }
 
     /// Newton settings of `[solver]` for time stepping.
@@ -204,7 +212,12 @@ impl Scene {
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = self.integrator()?;
         let mut sim = Simulation::new(self.build_system()?, integrator);
-        sim.adapter = self.adapter()?;
+        if let Some(adapter) = self.adapter()? {
+            sim = sim.with_adapter(adapter);
+        }
+        if self.output.error_estimate {
+            sim = sim.estimate_errors();
+        }
         sim.control = self.step_control();
         Ok(sim)
     }

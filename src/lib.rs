@@ -39,6 +39,7 @@ mod build;
 pub mod elastic_catenary;
 mod ensemble;
 mod error;
+pub mod estimate;
 mod grab;
 pub mod hard_cases;
 pub mod knot;

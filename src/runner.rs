@@ -1,6 +1,7 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
+use crate::estimate::EstimateOutput;
 use crate::knot_track::KnotTrack;
 use crate::observe::{Frame, Observer};
 use crate::scene::{MemberSummary, Method, Scene};
@@ -123,6 +124,9 @@ pub struct RunResult {
     /// Tightness of the knot over time (scenes with `[rod.overhand]` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub knot: Option<KnotTrack>,
+    /// The error estimate (tolerance-driven `[adaptivity]`, or `output.error_estimate`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adaptivity: Option<EstimateOutput>,
 }
 
 /// What a run accumulated besides the final state.
@@ -137,6 +141,7 @@ pub(crate) struct Tally {
     pub(crate) step_seconds: Vec<Real>,
     pub(crate) contact: Option<ContactStats>,
     pub(crate) knot: Option<KnotTrack>,
+    pub(crate) estimates: Option<EstimateOutput>,
 }
 
 impl Tally {
@@ -152,6 +157,7 @@ impl Tally {
             step_seconds: Vec::new(),
             contact: None,
             knot: None,
+            estimates: None,
         }
     }
 
@@ -343,6 +349,11 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
         let step_start = Instant::now();
         let report = sim.step(dt)?;
         tally.add_step(&report, radius);
+        if let Some(estimate) = sim.error_estimate() {
+            let changed = report.adapt.inserted + report.adapt.removed > 0;
+            let out = tally.estimates.get_or_insert_default();
+            out.record(sim.time, estimate, changed);
+        }
         if let Some(track) = &mut tally.knot {
             track.record(&sim.system, sim.time, false)?;
         }
@@ -427,6 +438,7 @@ pub(crate) fn finish(
         ensemble: Vec::new(),
         contact: tally.contact,
         knot: tally.knot,
+        adaptivity: tally.estimates,
     })
 }
 
@@ -500,6 +512,10 @@ impl RunResult {
                 "resolution: {} changes, {lo} to {hi} control points\n",
                 self.control_points_history.len() - 1
             ));
+        }
+        if let Some(a) = &self.adaptivity {
+            let e = a.estimated_error;
+            out.push_str(&format!("estimated error: {e:.2e} m\n"));
         }
         if self.pieces > 1 {
             out.push_str(&format!("{} pieces after cutting\n", self.pieces));

@@ -241,6 +241,10 @@ pub struct OutputSpec {
     /// Material points (fractions in `[0, 1]`) whose positions are recorded every step.
     #[serde(default)]
     pub probes: Vec<f64>,
+    /// Estimate the discretisation error after every step (on without asking when the
+    /// adaptivity is tolerance-driven): JSON `adaptivity.estimated_error` and `history`.
+    #[serde(default)]
+    pub error_estimate: bool,
 }
 
 fn default_samples() -> usize {
@@ -252,6 +256,7 @@ impl Default for OutputSpec {
         Self {
             samples: default_samples(),
             probes: Vec::new(),
+            error_estimate: false,
         }
     }
 }

@@ -13,16 +13,18 @@ pub struct AdaptivitySpec {
     /// Adapt after every step. Default true when the table is present.
     #[serde(default = "yes")]
     pub enabled: bool,
-    /// Curvature criterion: insert where `c_i` and `c_{i+1}` exceed this (in [0, 1]).
-    /// Default 0.05.
-    #[serde(default = "default_insert")]
-    pub insert_threshold: f64,
+    /// Error tolerance, m: refine where the estimated error exceeds it, coarsen far below
+    /// it (`ToleranceCriterion`). The default criterion, with `1e-4 · rest_length`
+    /// unless the curvature thresholds below are given instead.
+    pub tolerance: Option<f64>,
+    /// Curvature criterion (the paper's; chosen by giving a threshold): insert where
+    /// `c_i` and `c_{i+1}` exceed this (in [0, 1]). Default 0.05.
+    pub insert_threshold: Option<f64>,
     /// Curvature criterion: remove where all influenced `c` are below this. Default 0.005.
-    #[serde(default = "default_remove")]
-    pub remove_threshold: f64,
-    /// Largest curve displacement the removals of one step may cause, m. Default 1e-6.
-    #[serde(default = "default_tolerance")]
-    pub shape_tolerance: f64,
+    pub remove_threshold: Option<f64>,
+    /// Largest curve displacement the removals of one step may cause, m. Default a
+    /// quarter of the tolerance (1e-6 with the curvature criterion).
+    pub shape_tolerance: Option<f64>,
     /// Upper limit on control points. Default 200.
     #[serde(default = "default_max")]
     pub max_control_points: usize,
@@ -51,15 +53,6 @@ fn default_multiplicity() -> usize {
 fn yes() -> bool {
     true
 }
-fn default_insert() -> f64 {
-    0.05
-}
-fn default_remove() -> f64 {
-    0.005
-}
-fn default_tolerance() -> f64 {
-    1e-6
-}
 fn default_max() -> usize {
     200
 }
@@ -72,6 +65,30 @@ fn default_hysteresis() -> usize {
 fn default_radius() -> f64 {
     0.01
 }
+
+impl AdaptivitySpec {
+    /// Whether the curvature thresholds select the paper's criterion (a threshold given
+    /// and no tolerance).
+    pub fn uses_curvature(&self) -> bool {
+        self.tolerance.is_none() && (self.insert_threshold.is_some() || self.remove_threshold.is_some())
+    }
+
+    /// The curvature thresholds (insert, remove), defaults filled in.
+    pub fn thresholds(&self) -> (f64, f64) {
+        (
+            self.insert_threshold.unwrap_or(0.05),
+            self.remove_threshold.unwrap_or(0.005),
+        )
+    }
+
+    /// The error tolerance, m, for a rod of `rest_length` (default `1e-4 · rest_length`).
+    pub fn tolerance_for(&self, rest_length: f64) -> f64 {
+        self.tolerance.unwrap_or(DEFAULT_RELATIVE_TOLERANCE * rest_length)
+    }
+}
+
+/// Default error tolerance as a fraction of the rest length.
+pub const DEFAULT_RELATIVE_TOLERANCE: f64 = 1e-4;
 
 /// `[[grabs]]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -137,17 +154,26 @@ pub(crate) fn validate(
 }
 
 fn validate_adaptivity(a: &AdaptivitySpec, initial: usize) -> Result<(), Error> {
-    fraction("adaptivity.insert_threshold", a.insert_threshold)?;
-    fraction("adaptivity.remove_threshold", a.remove_threshold)?;
-    if a.remove_threshold > a.insert_threshold {
-        let reason = format!("must not exceed insert_threshold = {}", a.insert_threshold);
-        return Err(Error::field(
-            "adaptivity.remove_threshold",
-            a.remove_threshold,
-            reason,
-        ));
+    if let Some(t) = a.tolerance {
+        positive("adaptivity.tolerance", t)?;
+        let threshold = [("insert", a.insert_threshold), ("remove", a.remove_threshold)];
+        if let Some((which, Some(v))) = threshold.into_iter().find(|(_, v)| v.is_some()) {
+            let reason = format!(
+                "selects the curvature criterion, which contradicts tolerance = {t}: give one or the other"
+            );
+            return Err(Error::field(format!("adaptivity.{which}_threshold"), v, reason));
+        }
     }
-    positive("adaptivity.shape_tolerance", a.shape_tolerance)?;
+    let (insert, remove) = a.thresholds();
+    fraction("adaptivity.insert_threshold", insert)?;
+    fraction("adaptivity.remove_threshold", remove)?;
+    if remove > insert {
+        let reason = format!("must not exceed insert_threshold = {insert}");
+        return Err(Error::field("adaptivity.remove_threshold", remove, reason));
+    }
+    if let Some(t) = a.shape_tolerance {
+        positive("adaptivity.shape_tolerance", t)?;
+    }
     positive("adaptivity.min_span", a.min_span)?;
     fraction("adaptivity.min_span", a.min_span)?;
     positive("adaptivity.interaction_radius", a.interaction_radius)?;

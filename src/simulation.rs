@@ -7,13 +7,18 @@
 //! through the exact maps, telling every energy about each map, with the grabs and the
 //! contact points as interactions — and record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
 
+use crate::estimate::ErrorEstimation;
 use crate::substep::{StepControl, SubstepCounts, SubstepState};
 use crate::{Error, RodSystem};
-use splinerod_adaptivity::{AdaptReport, Adapter};
+use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
 use splinerod_core::{KnotMap, Real, Rod};
 use splinerod_energies::{ContactSummary, Energy};
 use splinerod_integrators::{Integrator, StepStats};
 use std::time::Instant;
+
+/// Most times one step is recomputed on a finer basis because its error estimate was
+/// rejected.
+const MAX_REDONE_STEPS: usize = 3;
 
 /// What one step did and how long it took.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -47,6 +52,13 @@ pub struct Simulation {
     /// Sub-stepping settings (smallest sub-step, optional time error tolerance).
     pub control: StepControl,
     pub(crate) substep: SubstepState,
+    /// The error estimator: run after every step when a criterion reads it or when set
+    /// (`Some`) on request; see [`Simulation::estimate_errors`].
+    pub estimation: Option<ErrorEstimation>,
+    /// Length of the last step, s (the inertial load of the error estimate).
+    last_dt: Real,
+    saved_time: Real,
+    saved_substep: SubstepState,
     interactions: Vec<Real>,
     saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
 }
@@ -62,15 +74,35 @@ impl Simulation {
             steps: 0,
             control: StepControl::default(),
             substep: SubstepState::default(),
+            estimation: None,
+            last_dt: 0.0,
+            saved_time: 0.0,
+            saved_substep: SubstepState::default(),
             interactions: Vec::new(),
             saved: (Vec::new(), Vec::new()),
         }
     }
 
-    /// Adds adaptive resolution (builder style).
+    /// Adds adaptive resolution (builder style); an adapter whose criteria read an error
+    /// estimate turns the estimator on.
     pub fn with_adapter(mut self, adapter: Adapter) -> Self {
+        if adapter.wants_estimate() {
+            self.estimation.get_or_insert_with(ErrorEstimation::default);
+        }
         self.adapter = Some(adapter);
         self
+    }
+
+    /// Turns the error estimate on after every step (builder style), with or without
+    /// adaptivity: [`Simulation::error_estimate`] then says how accurate the run is.
+    pub fn estimate_errors(mut self) -> Self {
+        self.estimation.get_or_insert_with(ErrorEstimation::default);
+        self
+    }
+
+    /// The latest error estimate (after a step), if the estimator is on.
+    pub fn error_estimate(&self) -> Option<&ErrorEstimate> {
+        self.estimation.as_ref().map(|e| e.latest())
     }
 
     /// Advances by `dt`, in as many sub-steps as the solver needs (see
@@ -81,21 +113,23 @@ impl Simulation {
             return Err(Error::field("dt", dt, "must be finite and positive"));
         }
         let start = Instant::now();
-        let saved_time = self.system.time;
-        self.saved.0.clone_from(&self.system.rod.positions);
-        self.saved.1.clone_from(&self.system.rod.velocities);
-        let (solver, substeps) = match self.integrate(dt) {
-            Ok(done) => done,
-            Err(e) => {
-                self.system.time = saved_time;
-                let rod = &mut self.system.rod;
-                rod.positions.clone_from(&self.saved.0);
-                rod.velocities.clone_from(&self.saved.1);
-                return Err(e);
+        let mut redone = 0;
+        let (solver, substeps) = loop {
+            let done = self.integrate_or_restore(dt)?;
+            if redone < MAX_REDONE_STEPS && self.step_rejected(dt)? {
+                self.restore();
+                if self.refine_for_redo()? > 0 {
+                    redone += 1;
+                    continue;
+                }
+                // Nothing could be inserted: the same step again, accepted.
+                break self.integrate_or_restore(dt)?;
             }
+            break done;
         };
         let integrate_seconds = start.elapsed().as_secs_f64();
         self.time += dt;
+        self.last_dt = dt;
         self.system.time = self.time;
         self.steps += 1;
         // A multiplier update moves the constrained energy's minimum: a dissipative scheme
@@ -104,7 +138,8 @@ impl Simulation {
         if !self.integrator.conserves_energy() {
             self.system.update_multipliers(false);
         }
-        let adapt = self.adapt()?;
+        let mut adapt = self.adapt_stage(false)?;
+        adapt.redone_steps = redone;
         let contact = self.system.contact.as_ref();
         let contact = contact.map(|c| c.summary(&self.system.rod)).transpose()?;
         Ok(StepReport {
@@ -117,11 +152,57 @@ impl Simulation {
         })
     }
 
-    /// Runs the adapt step now (no-op without an adapter).
+    /// Runs the error estimate (if on) and the adapt step (if any) now.
     pub fn adapt(&mut self) -> Result<AdaptReport, Error> {
-        let Some(adapter) = self.adapter.as_mut() else {
-            return Ok(AdaptReport::default());
+        self.adapt_stage(true)
+    }
+
+    /// Integrates one step of `dt` from a saved state, restoring it on error.
+    fn integrate_or_restore(&mut self, dt: Real) -> Result<(StepStats, SubstepCounts), Error> {
+        self.saved_time = self.system.time;
+        self.saved.0.clone_from(&self.system.rod.positions);
+        self.saved.1.clone_from(&self.system.rod.velocities);
+        self.saved_substep.clone_from(&self.substep);
+        self.integrate(dt).inspect_err(|_| self.restore())
+    }
+
+    /// Puts back the state saved before the last integration.
+    fn restore(&mut self) {
+        self.system.time = self.saved_time;
+        self.substep.clone_from(&self.saved_substep);
+        let rod = &mut self.system.rod;
+        rod.positions.clone_from(&self.saved.0);
+        rod.velocities.clone_from(&self.saved.1);
+    }
+
+    /// Whether the step just integrated must be recomputed on a finer basis: its error
+    /// estimate is far above what the adapter's criteria accept.
+    fn step_rejected(&mut self, dt: Real) -> Result<bool, Error> {
+        let wants = self.adapter.as_ref().is_some_and(|a| a.wants_estimate());
+        if !wants || self.estimation.is_none() {
+            return Ok(false);
+        }
+        self.last_dt = dt;
+        self.estimate()?;
+        let (Some(adapter), Some(e)) = (&self.adapter, &self.estimation) else {
+            return Ok(false);
         };
+        Ok(adapter.rejects(&self.system.rod, e.latest()))
+    }
+
+    /// Refines the restored start of a rejected step where the estimate asks for it;
+    /// returns the knots inserted.
+    fn refine_for_redo(&mut self) -> Result<usize, Error> {
+        let (Some(adapter), Some(e)) = (self.adapter.as_mut(), &self.estimation) else {
+            return Ok(0);
+        };
+        let RodSystem { rod, energies, .. } = &mut self.system;
+        let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
+        Ok(adapter.refine(rod, &self.interactions, e.latest(), &mut follow)?)
+    }
+
+    /// Collects the interaction points and runs the estimator on the current state.
+    fn estimate(&mut self) -> Result<(), Error> {
         self.interactions.clear();
         let t = self.system.time;
         let grabs = self.system.grabs.iter().filter(|g| g.active(t));
@@ -129,9 +210,29 @@ impl Simulation {
         if let Some(contact) = &self.system.contact {
             contact.interaction_points(&self.system.rod, &mut self.interactions)?;
         }
+        if let Some(e) = &mut self.estimation {
+            e.run(&self.system, &self.interactions, &self.saved.1, self.last_dt)?;
+        }
+        Ok(())
+    }
+
+    /// The adapt stage: the estimate (unless the rejection test just made it: `fresh`
+    /// false) and the adapter's insertions and removals.
+    fn adapt_stage(&mut self, fresh: bool) -> Result<AdaptReport, Error> {
+        if self.adapter.is_none() && self.estimation.is_none() {
+            return Ok(AdaptReport::default());
+        }
+        let made = !fresh && self.adapter.as_ref().is_some_and(|a| a.wants_estimate());
+        if !made {
+            self.estimate()?;
+        }
+        let estimate = self.estimation.as_ref().map(|e| e.latest());
+        let Some(adapter) = self.adapter.as_mut() else {
+            return Ok(AdaptReport::default());
+        };
         let RodSystem { rod, energies, .. } = &mut self.system;
         let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
-        Ok(adapter.adapt(rod, &self.interactions, &mut follow)?)
+        Ok(adapter.adapt(rod, &self.interactions, estimate, &mut follow)?)
     }
 
     /// Cuts the rod at material coordinate `s` (m; see [`Rod::cut`]).

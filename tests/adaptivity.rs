@@ -129,7 +129,7 @@ fn insertions_during_a_simulation_cause_no_energy_jump() {
             sim.system.potential_energy(),
         );
         let report = adapter
-            .adapt(&mut sim.system.rod, &[], &mut |_, _| {})
+            .adapt(&mut sim.system.rod, &[], None, &mut |_, _| {})
             .expect("adapt");
         inserted += report.inserted;
         let after = (

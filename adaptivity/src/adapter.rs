@@ -10,7 +10,7 @@
 //! energies with per-coefficient caches can follow (`Energy::on_knot_change`) without
 //! this crate knowing about them.
 
-use crate::{AdaptError, Refinement, RefinementCriterion};
+use crate::{AdaptError, ErrorEstimate, Refinement, RefinementCriterion};
 use splinerod_core::{KnotMap, Real, Rod};
 
 /// Limits of the adapt step.
@@ -75,6 +75,8 @@ pub struct AdaptReport {
     pub inserted: usize,
     /// Knots removed.
     pub removed: usize,
+    /// Times the step was recomputed on a finer basis (its estimate was rejected).
+    pub redone_steps: usize,
 }
 
 /// Criteria, limits and the memory (hysteresis) of the adapt step.
@@ -120,14 +122,24 @@ impl Adapter {
         self
     }
 
+    /// Whether a criterion reads an error estimate (pass one to [`Adapter::adapt`]).
+    pub fn wants_estimate(&self) -> bool {
+        self.criteria.iter().any(|c| c.wants_estimate())
+    }
+
     /// Runs the adapt step on `rod`; `interactions` are the material coordinates where
-    /// something acts on it; `on_change` sees the rod after every applied map.
+    /// something acts on it; `estimate` (if any) goes to the criteria first; `on_change`
+    /// sees the rod after every applied map.
     pub fn adapt(
         &mut self,
         rod: &mut Rod,
         interactions: &[Real],
+        estimate: Option<&ErrorEstimate>,
         on_change: &mut dyn FnMut(&Rod, &KnotMap),
     ) -> Result<AdaptReport, AdaptError> {
+        if let Some(estimate) = estimate {
+            self.criteria.iter_mut().for_each(|c| c.observe(estimate));
+        }
         self.protected.retain_mut(|(_, steps)| {
             *steps = steps.saturating_sub(1);
             *steps > 0
@@ -142,6 +154,26 @@ impl Adapter {
         }
         report.removed = self.remove_round(rod, interactions, on_change)?;
         Ok(report)
+    }
+
+    /// Whether a criterion rejects the step that produced `estimate` (and the rod may
+    /// still grow): recompute it after [`Adapter::refine`].
+    pub fn rejects(&self, rod: &Rod, estimate: &ErrorEstimate) -> bool {
+        rod.len() < self.params.max_control_points
+            && self.criteria.iter().any(|c| c.rejects(estimate))
+    }
+
+    /// One round of insertions only, from `estimate` (for the restored start of a
+    /// rejected step); returns the knots inserted.
+    pub fn refine(
+        &mut self,
+        rod: &mut Rod,
+        interactions: &[Real],
+        estimate: &ErrorEstimate,
+        on_change: &mut dyn FnMut(&Rod, &KnotMap),
+    ) -> Result<usize, AdaptError> {
+        self.criteria.iter_mut().for_each(|c| c.observe(estimate));
+        self.insert_round(rod, interactions, on_change)
     }
 
     fn collect(&mut self, rod: &Rod, interactions: &[Real]) {

@@ -8,6 +8,8 @@
 //!
 //! * [`RefinementCriterion`] — the extension point: look at a rod, mark insertions
 //!   and removals, mutate nothing;
+//! * [`ToleranceCriterion`] — resolution from an a posteriori error estimate in metres
+//!   ([`Estimator`], hierarchical; the mechanics come in through [`FineProblem`]);
 //! * [`CurvatureCriterion`] (eq. 13 on the control polygon) and [`InteractionCriterion`]
 //!   (knots where the rod is grabbed or touched);
 //! * [`Adapter`] — the adapt step with its limits and hysteresis ([`AdaptParams`]).
@@ -39,12 +41,16 @@
 mod adapter;
 pub mod curvature;
 mod error;
+pub mod estimate;
 mod interaction;
+mod tolerance;
 
 pub use adapter::{AdaptParams, AdaptReport, Adapter};
 pub use curvature::CurvatureCriterion;
 pub use error::AdaptError;
+pub use estimate::{ErrorEstimate, Estimator, FineProblem};
 pub use interaction::InteractionCriterion;
+pub use tolerance::ToleranceCriterion;
 
 use splinerod_core::{Real, Rod};
 
@@ -78,6 +84,22 @@ pub trait RefinementCriterion: Send + Sync {
     /// criterion proposes removing it. Default: no veto.
     fn vetoes_removal(&self, rod: &Rod, interactions: &[Real], knot: Real) -> bool {
         let _ = (rod, interactions, knot);
+        false
+    }
+    /// Whether this criterion reads an error estimate (the caller then computes one and
+    /// hands it over through [`observe`](RefinementCriterion::observe)). Default false.
+    fn wants_estimate(&self) -> bool {
+        false
+    }
+    /// Receives the error estimate of the rod before an adapt step's marks. Default:
+    /// ignored.
+    fn observe(&mut self, estimate: &ErrorEstimate) {
+        let _ = estimate;
+    }
+    /// Whether the step that produced `estimate` should be recomputed from its start on
+    /// a basis refined by this criterion's marks ([`Adapter::refine`]). Default false.
+    fn rejects(&self, estimate: &ErrorEstimate) -> bool {
+        let _ = estimate;
         false
     }
 }

@@ -92,6 +92,22 @@ pub trait BasisSpace: Send + Sync + fmt::Debug {
     fn remove_knot(&mut self, index: usize) -> Result<KnotMap, CoreError>;
     /// A boxed copy, so rods holding `Box<dyn BasisSpace>` can be cloned.
     fn clone_box(&self) -> Box<dyn BasisSpace>;
+    /// This space with every value of `values` (non-decreasing, strictly inside the
+    /// domain) inserted at once, and the exact old→new coefficient map in `op` — O(n),
+    /// where one insertion at a time is O(n²). Error estimators build finer scratch
+    /// copies with it. The default reports that the space does not support it.
+    fn refined(
+        &self,
+        values: &[Real],
+        op: &mut crate::refine::RefinementOperator,
+    ) -> Result<Box<dyn BasisSpace>, CoreError> {
+        let _ = op;
+        Err(CoreError::InvalidParameter {
+            name: "refinement",
+            value: values.len() as Real,
+            reason: "this basis space does not support inserting many knots at once",
+        })
+    }
 }
 
 impl Clone for Box<dyn BasisSpace> {

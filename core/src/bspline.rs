@@ -10,6 +10,7 @@
 
 use crate::basis::{BasisSpace, BasisValues, MAX_DEGREE, MAX_ORDER};
 use crate::knot_map::KnotMap;
+use crate::refine::{bspline_refinement, RefinementOperator};
 use crate::{CoreError, Real};
 
 /// B-spline basis functions of degree `d` on a knot vector `t_0 ≤ … ≤ t_{n+d}`.
@@ -301,6 +302,24 @@ impl BasisSpace for BSplineSpace {
 
     fn clone_box(&self) -> Box<dyn BasisSpace> {
         Box::new(self.clone())
+    }
+
+    fn refined(
+        &self,
+        values: &[Real],
+        op: &mut RefinementOperator,
+    ) -> Result<Box<dyn BasisSpace>, CoreError> {
+        let (start, end) = self.domain();
+        if let Some(&s) = values.iter().find(|&&s| !(s > start && s < end)) {
+            return Err(CoreError::OutsideDomain { s, start, end });
+        }
+        let mut knots = Vec::with_capacity(self.knots.len() + values.len());
+        knots.extend_from_slice(&self.knots);
+        knots.extend_from_slice(values);
+        knots.sort_by(Real::total_cmp);
+        let fine = Self::new(self.degree, knots)?;
+        bspline_refinement(self.degree, &self.knots, &fine.knots, op)?;
+        Ok(Box::new(fine))
     }
 }
 

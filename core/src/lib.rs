@@ -43,6 +43,7 @@ pub mod local_update;
 pub mod pins;
 pub mod proximity;
 pub mod quadrature;
+pub mod refine;
 pub mod rod;
 
 /// The scalar type of every physical quantity.
@@ -57,6 +58,7 @@ pub use knot_map::{Coefficient, KnotMap, KnotOperation};
 pub use pins::Pin;
 pub use proximity::{closest_points, Closest, SpanBoxes};
 pub use quadrature::{GaussLegendre, QuadPoint, QuadratureTable};
+pub use refine::RefinementOperator;
 pub use rod::{Material, Rod};
 
 /// Which second derivative an energy adds to a Newton matrix.

@@ -11,6 +11,7 @@
 //!
 //! Knot insertion changes the basis but not the curve, its velocity, nor any of these.
 
+use crate::refine::RefinementOperator;
 use crate::banded::SymBanded;
 use crate::basis::{greville, BasisSpace, BasisValues, MAX_DEGREE};
 use crate::knot_map::KnotMap;
@@ -152,6 +153,29 @@ impl Rod {
         }
         self.rebuild_caches(points)?;
         Ok(self)
+    }
+
+    /// A copy of this rod with every value of `values` (non-decreasing, strictly inside
+    /// the domain) inserted as a knot at once: the same curve and motion on a finer basis
+    /// (same quadrature points per span), and the old→new map in `op`. O(n); see
+    /// [`BasisSpace::refined`](crate::BasisSpace::refined).
+    pub fn refined(&self, values: &[Real], op: &mut RefinementOperator) -> Result<Rod, CoreError> {
+        let basis = self.basis.refined(values, op)?;
+        let mut rod = Self {
+            positions: Vec::new(),
+            velocities: Vec::new(),
+            damping: self.damping,
+            material: self.material,
+            basis,
+            quadrature: QuadratureTable::default(),
+            mass: SymBanded::default(),
+            lumped: Vec::new(),
+            topology_epoch: self.topology_epoch,
+        };
+        op.apply(&self.positions, &mut rod.positions);
+        op.apply(&self.velocities, &mut rod.velocities);
+        rod.rebuild_caches(self.quadrature.points_per_span())?;
+        Ok(rod)
     }
 
     /// Recomputes quadrature (`points` per span), mass matrix and lumped masses from the

@@ -72,6 +72,17 @@ pub trait Energy: Send + Sync {
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = (rod, map);
     }
+
+    /// This energy for `fine`, a copy of its rod on a finer basis (the same curve), for
+    /// error estimators that evaluate energies there. An energy whose data follow the
+    /// rod's coefficients or quadrature points (see
+    /// [`on_knot_change`](Energy::on_knot_change)) must return a copy that follows
+    /// `fine`; the default `None` says the energy holds no such data and is evaluated on
+    /// `fine` as it is.
+    fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
+        let _ = fine;
+        None
+    }
 }
 
 /// Central finite differences of the gradient, assembled with a colouring of the control

@@ -178,6 +178,20 @@ impl Stretching {
         Ok(s)
     }
 
+    /// Makes the cached data (rest metric, multipliers) follow `rod`'s current basis.
+    fn follow(&mut self, rod: &Rod) {
+        if let Some(rest) = &mut self.rest {
+            // The rest curve was regular where tabulated first; it stays so at any s.
+            if rest.tabulate(rod).is_err() {
+                rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
+            }
+        }
+        let rest = &self.rest;
+        if let Some(m) = &mut self.multipliers {
+            m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p]));
+        }
+    }
+
     /// Rest metric at quadrature point `p` (1 without a rest curve).
     #[inline]
     fn g0(&self, p: usize) -> Real {
@@ -320,16 +334,16 @@ impl Energy for Stretching {
     }
 
     fn on_knot_change(&mut self, rod: &Rod, _map: &KnotMap) {
-        if let Some(rest) = &mut self.rest {
-            // The rest curve was regular where tabulated first; it stays so at any s.
-            if rest.tabulate(rod).is_err() {
-                rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
-            }
+        self.follow(rod);
+    }
+
+    fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
+        if self.rest.is_none() && self.multipliers.is_none() {
+            return None;
         }
-        let rest = &self.rest;
-        if let Some(m) = &mut self.multipliers {
-            m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p]));
-        }
+        let mut copy = self.clone();
+        copy.follow(fine);
+        Some(Box::new(copy))
     }
 
     fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {

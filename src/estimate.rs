@@ -1,0 +1,226 @@
+//! The mechanics a [`RodSystem`] gives the error estimator
+//! ([`splinerod_adaptivity::estimate`]): on a finer copy of the rod, the residual of the
+//! step's equilibrium
+//!
+//! \\[ \hat r = \nabla \hat E + \hat M (\hat a + \alpha \hat v), \\]
+//!
+//! with every acting energy (energies with per-coefficient data through
+//! [`Energy::for_finer_rod`]; contact without friction, whose frozen data belong to the
+//! step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
+//! exactly onto the finer basis, and zero on coefficients a pin holds.
+//!
+//! The stiffness is the potential's definite Hessian plus \(2\hat M / t^2\), `t` the
+//! simulated time so far: a residual force `r` that has acted for a time `t` moves a
+//! mass it is not resisted by elastically by at most `r t² / 2m`, and one that is
+//! resisted by at most `K⁻¹ r`. Early in a run (a rod released from a straight, slack
+//! start) inertia bounds the estimate; once the motion has lasted, the elastic term
+//! does — the equilibrium's spatial error, with the step's acceleration as a load.
+
+use crate::{Error, RodSystem};
+use serde::Serialize;
+use nalgebra::{Matrix3, Vector3};
+use splinerod_integrators::linear::LinearSolver;
+use splinerod_adaptivity::{AdaptError, ErrorEstimate, Estimator, FineProblem};
+use splinerod_core::{BlockBanded, HessianKind, Real, RefinementOperator, Rod};
+use splinerod_energies::{Contact, Energy};
+
+/// The estimator and its scratch state, kept by a [`crate::Simulation`].
+#[derive(Debug, Default)]
+pub struct ErrorEstimation {
+    estimator: Estimator,
+    /// Frictionless copy of the system's contact, evaluated on the finer rod.
+    contact: Option<Contact>,
+    acceleration: Vec<Vector3<Real>>,
+    scratch: Scratch,
+}
+
+/// Buffers of the finer problem, kept between estimates.
+#[derive(Debug, Default)]
+struct Scratch {
+    load: Vec<Vector3<Real>>,
+    force: Vec<Vector3<Real>>,
+    /// Coefficients of the finer rod held by pins.
+    held: Vec<usize>,
+    flat: Vec<Real>,
+    solver: LinearSolver,
+    solves: u64,
+}
+
+impl ErrorEstimation {
+    /// The latest estimate.
+    pub fn latest(&self) -> &ErrorEstimate {
+        &self.estimator.estimate
+    }
+
+    /// Estimates the error of `system`'s rod after a step of `dt` seconds that started
+    /// with velocities `start` (ignored if its length differs: no inertial load).
+    pub fn run(
+        &mut self,
+        system: &RodSystem,
+        interactions: &[Real],
+        start: &[Vector3<Real>],
+        dt: Real,
+    ) -> Result<&ErrorEstimate, Error> {
+        let elapsed = system.time;
+        let rod = &system.rod;
+        self.acceleration.clear();
+        if start.len() == rod.len() && dt > 0.0 {
+            let a = rod.velocities.iter().zip(start).map(|(v, v0)| (v - v0) / dt);
+            self.acceleration.extend(a);
+        }
+        if let Some(c) = &system.contact {
+            if self.contact.is_none() {
+                let mut params = c.params().clone();
+                params.friction = 0.0;
+                self.contact = Some(Contact::new(params)?);
+            }
+        }
+        let mut problem = Mechanics {
+            system,
+            contact: self.contact.as_ref().filter(|_| system.contact.is_some()),
+            acceleration: &self.acceleration,
+            scratch: &mut self.scratch,
+            elapsed,
+        };
+        Ok(self.estimator.run(rod, interactions, &mut problem)?)
+    }
+}
+
+struct Mechanics<'a> {
+    system: &'a RodSystem,
+    contact: Option<&'a Contact>,
+    acceleration: &'a [Vector3<Real>],
+    scratch: &'a mut Scratch,
+    /// Simulated time so far, s (0: no inertial bound, a static estimate).
+    elapsed: Real,
+}
+
+impl Mechanics<'_> {
+    /// Every acting energy, as evaluated on `fine`.
+    fn for_each_energy(&self, fine: &Rod, mut f: impl FnMut(&dyn Energy)) {
+        for e in &self.system.energies {
+            match e.for_finer_rod(fine) {
+                Some(copy) => f(copy.as_ref()),
+                None => f(e.as_ref()),
+            }
+        }
+        self.system.active_grabs().for_each(&mut f);
+        if let Some(c) = self.contact {
+            f(c);
+        }
+    }
+}
+
+impl FineProblem for Mechanics<'_> {
+    fn evaluate(
+        &mut self,
+        fine: &Rod,
+        op: &RefinementOperator,
+        residual: &mut [Vector3<Real>],
+        stiffness: &mut BlockBanded,
+    ) -> Result<(), AdaptError> {
+        self.for_each_energy(fine, |e| {
+            e.add_gradient(fine, residual);
+            e.add_hessian(fine, HessianKind::Definite, stiffness);
+        });
+        if self.elapsed > 0.0 {
+            stiffness.add_scaled_scalar(2.0 / self.elapsed.powi(2), fine.mass_matrix());
+        }
+        // Inertia and damping: M̂ (â + α v̂).
+        let Scratch {
+            load, force, held, ..
+        } = &mut *self.scratch;
+        op.apply(self.acceleration, load);
+        for (l, v) in load.iter_mut().zip(&fine.velocities) {
+            *l += v * fine.damping;
+        }
+        force.resize(fine.len(), Vector3::zeros());
+        fine.mass_matrix().mul_vec3(load, force);
+        for (r, f) in residual.iter_mut().zip(force.iter()) {
+            *r += f;
+        }
+        held.clear();
+        for pin in &self.system.pins {
+            let row = pin.row(fine)?;
+            let values = row.value.iter().take(fine.basis().degree() + 1);
+            held.extend(values.enumerate().filter(|(_, &b)| b != 0.0).map(|(k, _)| row.first + k));
+        }
+        for &k in held.iter() {
+            residual[k] = Vector3::zeros();
+        }
+        Ok(())
+    }
+
+    fn solve(
+        &mut self,
+        stiffness: &mut BlockBanded,
+        rhs: &mut [Vector3<Real>],
+    ) -> Result<bool, AdaptError> {
+        let s = &mut *self.scratch;
+        hold(stiffness, &s.held);
+        s.flat.clear();
+        s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
+        s.solves += 1;
+        if s.solver.factor(stiffness, s.solves).is_err() || s.solver.solve_in_place(&mut s.flat).is_err() {
+            return Ok(false);
+        }
+        for (v, x) in rhs.iter_mut().zip(s.flat.chunks_exact(3)) {
+            *v = Vector3::new(x[0], x[1], x[2]);
+        }
+        Ok(s.flat.iter().all(|x| x.is_finite()))
+    }
+
+    fn bandwidth(&self, fine: &Rod) -> usize {
+        let mut w = fine.basis().degree();
+        self.for_each_energy(fine, |e| w = w.max(e.bandwidth(fine)));
+        w
+    }
+}
+
+/// Interval of simulated time between history entries when the resolution is unchanged, s.
+const HISTORY_INTERVAL: Real = 0.05;
+
+/// JSON `adaptivity`: the error estimate of a run.
+#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+pub struct EstimateOutput {
+    /// The last estimate (after the last step), m.
+    pub estimated_error: Real,
+    /// `[t, control points, estimated error]` after every step that changed the
+    /// resolution and at least every 0.05 s; the count is that of the rod estimated (the
+    /// step's, before its adapt stage).
+    pub history: Vec<[Real; 3]>,
+}
+
+impl EstimateOutput {
+    /// Records `estimate` made at time `t`; `changed`: the step changed the resolution.
+    pub fn record(&mut self, t: Real, estimate: &ErrorEstimate, changed: bool) {
+        let error = estimate.max();
+        self.estimated_error = error;
+        let due = self
+            .history
+            .last()
+            .is_none_or(|h| t >= h[0] + HISTORY_INTERVAL * (1.0 - 1e-9));
+        if changed || due {
+            self.history
+                .push([t, estimate.control_points as Real, error]);
+        }
+    }
+}
+
+/// Decouples the coefficients `held` in `a` (identity rows and columns, scaled like
+/// the diagonal), so that a solve keeps them at the right-hand side's zero.
+fn hold(a: &mut BlockBanded, held: &[usize]) {
+    let (n, w) = (a.dim(), a.bandwidth());
+    for &k in held {
+        let scale = a.block(k, k).trace().abs().max(1.0) / 3.0;
+        for j in k.saturating_sub(w)..(k + w + 1).min(n) {
+            a.set_block(k, j, &Matrix3::zeros());
+        }
+        a.set_block(k, k, &(Matrix3::identity() * scale));
+    }
+    for f in a.far_blocks_mut() {
+        if held.contains(&f.row) || held.contains(&f.col) {
+            f.block = Matrix3::zeros();
+        }
+    }
+}
