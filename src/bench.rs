@@ -9,7 +9,8 @@
 //!   on all threads, and the parallel efficiency;
 //! * resident memory per control point of the 100 000-point cable and its solver;
 //! * wall time to settle the stiff (EA = 10⁴ N) catenary, released straight, to within
-//!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements).
+//!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements);
+//! * the cost of the tolerance-driven adapt stage ([`crate::bench_adapt`]).
 
 use crate::problems::pinned_cable;
 use crate::{Ensemble, Error, RodSystem, Simulation};
@@ -50,6 +51,11 @@ pub struct BenchResult {
     pub hard_cases_total: usize,
     /// Mean Newton iterations per step on the default scene (`scenes/hanging_cable.toml`).
     pub newton_per_step_default: Real,
+    /// The adapt stage (tolerance-driven: estimate, marks, maps) over the step, at 16
+    /// control points.
+    pub adapt_fraction_16: Real,
+    /// The adapt stage's time per control point, ns, by size (1 000 and 100 000).
+    pub adapt_ns_per_cp: BTreeMap<String, Real>,
 }
 
 /// The README's default scene, embedded.
@@ -61,7 +67,7 @@ fn newton_per_step_default() -> Result<Real, Error> {
     Ok(result.solver.newton_iterations as Real / result.steps.max(1) as Real)
 }
 
-fn one_iteration() -> Result<Box<dyn Integrator>, Error> {
+pub(crate) fn one_iteration() -> Result<Box<dyn Integrator>, Error> {
     let p = NewtonParams {
         max_iterations: 1,
         line_search: false,
@@ -70,7 +76,7 @@ fn one_iteration() -> Result<Box<dyn Integrator>, Error> {
     Ok(Box::new(ImplicitEuler::new(p)?))
 }
 
-fn median(mut v: Vec<Real>) -> Real {
+pub(crate) fn median(mut v: Vec<Real>) -> Real {
     v.sort_by(Real::total_cmp);
     v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
@@ -231,5 +237,10 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         hard_cases_converged: crate::hard_cases::count_converged()?,
         hard_cases_total,
         newton_per_step_default: newton_per_step_default()?,
+        adapt_fraction_16: crate::bench_adapt::adapt_fraction_16(scale(20_000, 2_000))?,
+        adapt_ns_per_cp: [(1_000, scale(640, 64)), (100_000, scale(64, 32))]
+            .into_iter()
+            .map(|(n, reps)| Ok((n.to_string(), crate::bench_adapt::adapt_ns_per_cp(n, reps)?)))
+            .collect::<Result<_, Error>>()?,
     })
 }

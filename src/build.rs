@@ -146,7 +146,11 @@ impl Scene {
         };
         let l = self.rod.rest_length;
         let tolerance = a.tolerance_for(l);
-        let default_shape = if a.uses_curvature() { 1e-6 } else { 0.25 * tolerance };
+        let default_shape = if a.uses_curvature() {
+            1e-6
+        } else {
+            0.25 * tolerance
+        };
         let params = AdaptParams {
             max_control_points: a.max_control_points,
             min_control_points: a.min_control_points.unwrap_or(self.rod.control_points),

@@ -17,12 +17,19 @@
 //! does — the equilibrium's spatial error, with the step's acceleration as a load.
 
 use crate::{Error, RodSystem};
-use serde::Serialize;
 use nalgebra::{Matrix3, Vector3};
-use splinerod_integrators::linear::LinearSolver;
+use serde::Serialize;
 use splinerod_adaptivity::{AdaptError, ErrorEstimate, Estimator, FineProblem};
 use splinerod_core::{BlockBanded, HessianKind, Real, RefinementOperator, Rod};
 use splinerod_energies::{Contact, Energy};
+use splinerod_integrators::linear::LinearSolver;
+
+/// The fewest steps a residual is taken to have acted for (the inertial bound's time is
+/// at least this many steps).
+const MIN_STEPS_ACTING: Real = 20.0;
+
+/// Standard gravity, m/s² (the time scale of the inertial bound).
+const STANDARD_GRAVITY: Real = 9.81;
 
 /// The estimator and its scratch state, kept by a [`crate::Simulation`].
 #[derive(Debug, Default)]
@@ -32,7 +39,28 @@ pub struct ErrorEstimation {
     contact: Option<Contact>,
     acceleration: Vec<Vector3<Real>>,
     scratch: Scratch,
+    schedule: Schedule,
 }
+
+/// When estimates are made: every step while the resolution, the interactions or the
+/// estimate change; the interval doubles (up to [`MAX_INTERVAL`]) while they do not.
+#[derive(Debug, Default)]
+struct Schedule {
+    /// Steps between estimates now (0 before the first).
+    interval: usize,
+    /// Steps since the last estimate.
+    since: usize,
+    /// The knots, interactions and estimate of the last estimate.
+    knots: Vec<Real>,
+    interactions: Vec<Real>,
+    error: Real,
+}
+
+/// Most steps between two estimates of a steady rod.
+pub const MAX_INTERVAL: usize = 32;
+
+/// An estimate within this fraction of the previous one counts as steady.
+const STEADY: Real = 0.25;
 
 /// Buffers of the finer problem, kept between estimates.
 #[derive(Debug, Default)]
@@ -47,6 +75,41 @@ struct Scratch {
 }
 
 impl ErrorEstimation {
+    /// Whether an estimate is due after the step just taken (counts the step if not):
+    /// the first one, or the rod's knots or the interactions changed since the last,
+    /// or the interval has passed. Estimates cost a Newton step on a finer basis, so a
+    /// steady run makes one every [`MAX_INTERVAL`] steps at most.
+    pub fn due(&mut self, rod: &Rod, interactions: &[Real]) -> bool {
+        let s = &mut self.schedule;
+        s.since += 1;
+        s.interval == 0
+            || s.since >= s.interval
+            || s.knots != rod.basis().knots()
+            || s.interactions != interactions
+    }
+
+    /// Records the estimate just made for the schedule; `calm`: the adapter is content
+    /// with it (far within its tolerance), so the interval may grow if it is steady.
+    pub fn schedule(&mut self, rod: &Rod, interactions: &[Real], calm: bool) {
+        let s = &mut self.schedule;
+        let error = self.estimator.estimate.max();
+        let steady = calm
+            && s.interval > 0
+            && s.knots == rod.basis().knots()
+            && (error - s.error).abs() <= STEADY * s.error;
+        s.interval = if steady {
+            (2 * s.interval).min(MAX_INTERVAL)
+        } else {
+            1
+        };
+        s.since = 0;
+        s.error = error;
+        s.knots.clear();
+        s.knots.extend_from_slice(rod.basis().knots());
+        s.interactions.clear();
+        s.interactions.extend_from_slice(interactions);
+    }
+
     /// The latest estimate.
     pub fn latest(&self) -> &ErrorEstimate {
         &self.estimator.estimate
@@ -61,16 +124,21 @@ impl ErrorEstimation {
         start: &[Vector3<Real>],
         dt: Real,
     ) -> Result<&ErrorEstimate, Error> {
-        let elapsed = system.time;
+        let pendulum = (system.rod.material().rest_length / STANDARD_GRAVITY).sqrt();
+        let elapsed = system.time.max(MIN_STEPS_ACTING * dt).min(pendulum);
         let rod = &system.rod;
         self.acceleration.clear();
         if start.len() == rod.len() && dt > 0.0 {
-            let a = rod.velocities.iter().zip(start).map(|(v, v0)| (v - v0) / dt);
+            let a = rod
+                .velocities
+                .iter()
+                .zip(start)
+                .map(|(v, v0)| (v - v0) / dt);
             self.acceleration.extend(a);
         }
         if let Some(c) = &system.contact {
             if self.contact.is_none() {
-                let mut params = c.params().clone();
+                let mut params = *c.params();
                 params.friction = 0.0;
                 self.contact = Some(Contact::new(params)?);
             }
@@ -143,7 +211,12 @@ impl FineProblem for Mechanics<'_> {
         for pin in &self.system.pins {
             let row = pin.row(fine)?;
             let values = row.value.iter().take(fine.basis().degree() + 1);
-            held.extend(values.enumerate().filter(|(_, &b)| b != 0.0).map(|(k, _)| row.first + k));
+            held.extend(
+                values
+                    .enumerate()
+                    .filter(|(_, &b)| b != 0.0)
+                    .map(|(k, _)| row.first + k),
+            );
         }
         for &k in held.iter() {
             residual[k] = Vector3::zeros();
@@ -161,7 +234,9 @@ impl FineProblem for Mechanics<'_> {
         s.flat.clear();
         s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
         s.solves += 1;
-        if s.solver.factor(stiffness, s.solves).is_err() || s.solver.solve_in_place(&mut s.flat).is_err() {
+        if s.solver.factor(stiffness, s.solves).is_err()
+            || s.solver.solve_in_place(&mut s.flat).is_err()
+        {
             return Ok(false);
         }
         for (v, x) in rhs.iter_mut().zip(s.flat.chunks_exact(3)) {
@@ -186,23 +261,23 @@ pub struct EstimateOutput {
     /// The last estimate (after the last step), m.
     pub estimated_error: Real,
     /// `[t, control points, estimated error]` after every step that changed the
-    /// resolution and at least every 0.05 s; the count is that of the rod estimated (the
-    /// step's, before its adapt stage).
+    /// resolution and at least every 0.05 s (of the estimates made: while the rod is
+    /// steady they are up to 32 steps apart); the count is that of the rod estimated
+    /// (the step's, before its adapt stage).
     pub history: Vec<[Real; 3]>,
 }
 
 impl EstimateOutput {
-    /// Records `estimate` made at time `t`; `changed`: the step changed the resolution.
-    pub fn record(&mut self, t: Real, estimate: &ErrorEstimate, changed: bool) {
-        let error = estimate.max();
+    /// Records an estimate `error` (m) made at time `t` on `control_points`; `changed`:
+    /// the step changed the resolution.
+    pub fn record(&mut self, t: Real, control_points: usize, error: Real, changed: bool) {
         self.estimated_error = error;
         let due = self
             .history
             .last()
             .is_none_or(|h| t >= h[0] + HISTORY_INTERVAL * (1.0 - 1e-9));
         if changed || due {
-            self.history
-                .push([t, estimate.control_points as Real, error]);
+            self.history.push([t, control_points as Real, error]);
         }
     }
 }

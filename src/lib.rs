@@ -33,8 +33,11 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod adaptive_study;
 #[cfg(feature = "parallel")]
 pub mod bench;
+#[cfg(feature = "parallel")]
+pub mod bench_adapt;
 mod build;
 pub mod elastic_catenary;
 mod ensemble;

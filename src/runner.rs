@@ -349,10 +349,10 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
         let step_start = Instant::now();
         let report = sim.step(dt)?;
         tally.add_step(&report, radius);
-        if let Some(estimate) = sim.error_estimate() {
+        if let (Some(error), Some(e)) = (report.error_estimate, sim.error_estimate()) {
             let changed = report.adapt.inserted + report.adapt.removed > 0;
             let out = tally.estimates.get_or_insert_default();
-            out.record(sim.time, estimate, changed);
+            out.record(sim.time, e.control_points, error, changed);
         }
         if let Some(track) = &mut tally.knot {
             track.record(&sim.system, sim.time, false)?;
@@ -368,6 +368,11 @@ fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<Run
         }
     }
     tally.wall = start.elapsed().as_secs_f64();
+    if let Some(e) = sim.estimate_now()? {
+        let (n, error) = (e.control_points, e.max());
+        let out = tally.estimates.get_or_insert_default();
+        out.record(sim.time, n, error, true);
+    }
     if let Some(track) = &mut tally.knot {
         track.record(&sim.system, sim.time, true)?;
     }

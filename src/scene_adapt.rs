@@ -70,7 +70,8 @@ impl AdaptivitySpec {
     /// Whether the curvature thresholds select the paper's criterion (a threshold given
     /// and no tolerance).
     pub fn uses_curvature(&self) -> bool {
-        self.tolerance.is_none() && (self.insert_threshold.is_some() || self.remove_threshold.is_some())
+        self.tolerance.is_none()
+            && (self.insert_threshold.is_some() || self.remove_threshold.is_some())
     }
 
     /// The curvature thresholds (insert, remove), defaults filled in.
@@ -83,7 +84,8 @@ impl AdaptivitySpec {
 
     /// The error tolerance, m, for a rod of `rest_length` (default `1e-4 · rest_length`).
     pub fn tolerance_for(&self, rest_length: f64) -> f64 {
-        self.tolerance.unwrap_or(DEFAULT_RELATIVE_TOLERANCE * rest_length)
+        self.tolerance
+            .unwrap_or(DEFAULT_RELATIVE_TOLERANCE * rest_length)
     }
 }
 
@@ -156,12 +158,19 @@ pub(crate) fn validate(
 fn validate_adaptivity(a: &AdaptivitySpec, initial: usize) -> Result<(), Error> {
     if let Some(t) = a.tolerance {
         positive("adaptivity.tolerance", t)?;
-        let threshold = [("insert", a.insert_threshold), ("remove", a.remove_threshold)];
+        let threshold = [
+            ("insert", a.insert_threshold),
+            ("remove", a.remove_threshold),
+        ];
         if let Some((which, Some(v))) = threshold.into_iter().find(|(_, v)| v.is_some()) {
             let reason = format!(
                 "selects the curvature criterion, which contradicts tolerance = {t}: give one or the other"
             );
-            return Err(Error::field(format!("adaptivity.{which}_threshold"), v, reason));
+            return Err(Error::field(
+                format!("adaptivity.{which}_threshold"),
+                v,
+                reason,
+            ));
         }
     }
     let (insert, remove) = a.thresholds();

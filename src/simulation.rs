@@ -8,7 +8,7 @@
 //! contact points as interactions — and record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
 
 use crate::estimate::ErrorEstimation;
-use crate::substep::{StepControl, SubstepCounts, SubstepState};
+use crate::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepState};
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
 use splinerod_core::{KnotMap, Real, Rod};
@@ -35,6 +35,8 @@ pub struct StepReport {
     pub substeps: SubstepCounts,
     /// Contacts at the end of the step (`None` without contact).
     pub contact: Option<ContactSummary>,
+    /// The error estimate made at this step, m (`None` when none was due).
+    pub error_estimate: Option<Real>,
 }
 
 /// A rod system, the integrator that advances it and, optionally, the adapt step.
@@ -58,7 +60,7 @@ pub struct Simulation {
     /// Length of the last step, s (the inertial load of the error estimate).
     last_dt: Real,
     saved_time: Real,
-    saved_substep: SubstepState,
+    saved_substep: SubstepMemory,
     interactions: Vec<Real>,
     saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
 }
@@ -77,7 +79,7 @@ impl Simulation {
             estimation: None,
             last_dt: 0.0,
             saved_time: 0.0,
-            saved_substep: SubstepState::default(),
+            saved_substep: SubstepMemory::default(),
             interactions: Vec::new(),
             saved: (Vec::new(), Vec::new()),
         }
@@ -114,22 +116,24 @@ impl Simulation {
         }
         let start = Instant::now();
         let mut redone = 0;
-        let (solver, substeps) = loop {
-            let done = self.integrate_or_restore(dt)?;
-            if redone < MAX_REDONE_STEPS && self.step_rejected(dt)? {
+        let (solver, substeps, fresh) = loop {
+            let (solver, substeps) = self.integrate_or_restore(dt)?;
+            self.last_dt = dt;
+            let fresh = self.estimate_if_due()?;
+            if fresh && redone < MAX_REDONE_STEPS && self.rejected() {
                 self.restore();
                 if self.refine_for_redo()? > 0 {
                     redone += 1;
                     continue;
                 }
                 // Nothing could be inserted: the same step again, accepted.
-                break self.integrate_or_restore(dt)?;
+                let (solver, substeps) = self.integrate_or_restore(dt)?;
+                break (solver, substeps, fresh);
             }
-            break done;
+            break (solver, substeps, fresh);
         };
         let integrate_seconds = start.elapsed().as_secs_f64();
         self.time += dt;
-        self.last_dt = dt;
         self.system.time = self.time;
         self.steps += 1;
         // A multiplier update moves the constrained energy's minimum: a dissipative scheme
@@ -138,8 +142,11 @@ impl Simulation {
         if !self.integrator.conserves_energy() {
             self.system.update_multipliers(false);
         }
-        let mut adapt = self.adapt_stage(false)?;
+        let mut adapt = self.apply_adapter(fresh)?;
         adapt.redone_steps = redone;
+        let error_estimate = fresh
+            .then(|| self.error_estimate().map(|e| e.max()))
+            .flatten();
         let contact = self.system.contact.as_ref();
         let contact = contact.map(|c| c.summary(&self.system.rod)).transpose()?;
         Ok(StepReport {
@@ -149,12 +156,28 @@ impl Simulation {
             integrate_seconds,
             substeps,
             contact,
+            error_estimate,
         })
     }
 
     /// Runs the error estimate (if on) and the adapt step (if any) now.
     pub fn adapt(&mut self) -> Result<AdaptReport, Error> {
-        self.adapt_stage(true)
+        let fresh = self.estimate_now()?.is_some();
+        self.apply_adapter(fresh)
+    }
+
+    /// Runs the error estimate now (if on), whatever the schedule, and returns it.
+    pub fn estimate_now(&mut self) -> Result<Option<&ErrorEstimate>, Error> {
+        self.gather_interactions()?;
+        match &mut self.estimation {
+            Some(e) => Ok(Some(e.run(
+                &self.system,
+                &self.interactions,
+                &self.saved.1,
+                self.last_dt,
+            )?)),
+            None => Ok(None),
+        }
     }
 
     /// Integrates one step of `dt` from a saved state, restoring it on error.
@@ -162,32 +185,26 @@ impl Simulation {
         self.saved_time = self.system.time;
         self.saved.0.clone_from(&self.system.rod.positions);
         self.saved.1.clone_from(&self.system.rod.velocities);
-        self.saved_substep.clone_from(&self.substep);
+        self.saved_substep = self.substep.memory();
         self.integrate(dt).inspect_err(|_| self.restore())
     }
 
     /// Puts back the state saved before the last integration.
     fn restore(&mut self) {
         self.system.time = self.saved_time;
-        self.substep.clone_from(&self.saved_substep);
+        self.substep.restore(self.saved_substep);
         let rod = &mut self.system.rod;
         rod.positions.clone_from(&self.saved.0);
         rod.velocities.clone_from(&self.saved.1);
     }
 
-    /// Whether the step just integrated must be recomputed on a finer basis: its error
+    /// Whether the step just estimated must be recomputed on a finer basis: its error
     /// estimate is far above what the adapter's criteria accept.
-    fn step_rejected(&mut self, dt: Real) -> Result<bool, Error> {
-        let wants = self.adapter.as_ref().is_some_and(|a| a.wants_estimate());
-        if !wants || self.estimation.is_none() {
-            return Ok(false);
+    fn rejected(&self) -> bool {
+        match (&self.adapter, &self.estimation) {
+            (Some(adapter), Some(e)) => adapter.rejects(&self.system.rod, e.latest()),
+            _ => false,
         }
-        self.last_dt = dt;
-        self.estimate()?;
-        let (Some(adapter), Some(e)) = (&self.adapter, &self.estimation) else {
-            return Ok(false);
-        };
-        Ok(adapter.rejects(&self.system.rod, e.latest()))
     }
 
     /// Refines the restored start of a rejected step where the estimate asks for it;
@@ -201,8 +218,9 @@ impl Simulation {
         Ok(adapter.refine(rod, &self.interactions, e.latest(), &mut follow)?)
     }
 
-    /// Collects the interaction points and runs the estimator on the current state.
-    fn estimate(&mut self) -> Result<(), Error> {
+    /// The material coordinates where something acts on the rod now: active grabs and
+    /// contacts.
+    fn gather_interactions(&mut self) -> Result<(), Error> {
         self.interactions.clear();
         let t = self.system.time;
         let grabs = self.system.grabs.iter().filter(|g| g.active(t));
@@ -210,23 +228,47 @@ impl Simulation {
         if let Some(contact) = &self.system.contact {
             contact.interaction_points(&self.system.rod, &mut self.interactions)?;
         }
-        if let Some(e) = &mut self.estimation {
-            e.run(&self.system, &self.interactions, &self.saved.1, self.last_dt)?;
-        }
         Ok(())
     }
 
-    /// The adapt stage: the estimate (unless the rejection test just made it: `fresh`
-    /// false) and the adapter's insertions and removals.
-    fn adapt_stage(&mut self, fresh: bool) -> Result<AdaptReport, Error> {
-        if self.adapter.is_none() && self.estimation.is_none() {
+    /// Runs the estimator on the state just integrated if it is on and an estimate is
+    /// due ([`ErrorEstimation::due`]); whether it ran.
+    fn estimate_if_due(&mut self) -> Result<bool, Error> {
+        if self.estimation.is_none() {
+            return Ok(false);
+        }
+        self.gather_interactions()?;
+        let Some(e) = &mut self.estimation else {
+            return Ok(false);
+        };
+        if !e.due(&self.system.rod, &self.interactions) {
+            return Ok(false);
+        }
+        let estimate = e.run(
+            &self.system,
+            &self.interactions,
+            &self.saved.1,
+            self.last_dt,
+        )?;
+        let calm = self.adapter.as_ref().is_none_or(|a| a.content(estimate));
+        e.schedule(&self.system.rod, &self.interactions, calm);
+        Ok(true)
+    }
+
+    /// The adapter's insertions and removals, with the latest estimate if `fresh` (the
+    /// interactions were then gathered with it).
+    fn apply_adapter(&mut self, fresh: bool) -> Result<AdaptReport, Error> {
+        if self.adapter.is_none() {
             return Ok(AdaptReport::default());
         }
-        let made = !fresh && self.adapter.as_ref().is_some_and(|a| a.wants_estimate());
-        if !made {
-            self.estimate()?;
+        if !fresh {
+            self.gather_interactions()?;
         }
-        let estimate = self.estimation.as_ref().map(|e| e.latest());
+        let estimate = self
+            .estimation
+            .as_ref()
+            .filter(|_| fresh)
+            .map(|e| e.latest());
         let Some(adapter) = self.adapter.as_mut() else {
             return Ok(AdaptReport::default());
         };

@@ -85,6 +85,31 @@ pub(crate) struct SubstepState {
     targets: Vec<Vector3<Real>>,
 }
 
+/// The controller's memory without its scratch buffers: what a recomputed step must
+/// start from again.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SubstepMemory {
+    next: Option<Real>,
+    ceiling: Option<Real>,
+    streak: usize,
+}
+
+impl SubstepState {
+    /// The memory to restore a step from.
+    pub(crate) fn memory(&self) -> SubstepMemory {
+        SubstepMemory {
+            next: self.next,
+            ceiling: self.ceiling,
+            streak: self.streak,
+        }
+    }
+
+    /// Puts back a saved memory.
+    pub(crate) fn restore(&mut self, m: SubstepMemory) {
+        (self.next, self.ceiling, self.streak) = (m.next, m.ceiling, m.streak);
+    }
+}
+
 /// Whether a shorter step may cure `e`.
 fn retryable(e: &Error) -> bool {
     matches!(e, Error::Integrator(e) if e.is_recoverable())

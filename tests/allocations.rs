@@ -71,3 +71,34 @@ fn steps_do_not_allocate_after_warm_up() {
         }
     }
 }
+
+/// The tolerance-driven adapt stage (error estimate, marks) on a steady rod allocates
+/// nothing either: the finer copy, its operator and the solver's storage are kept.
+#[test]
+fn error_estimates_do_not_allocate_after_warm_up() {
+    use splinerod::adaptivity::{AdaptParams, Adapter, ToleranceCriterion};
+    for n in [16, 200] {
+        let system = pinned_cable(n, 1.05, 100.0).expect("cable");
+        let euler = Box::new(ImplicitEuler::new(NewtonParams::default()).expect("p"));
+        let params = AdaptParams {
+            max_control_points: n,
+            min_control_points: n,
+            ..AdaptParams::default()
+        };
+        let criterion = ToleranceCriterion::new(1.0).expect("tolerance");
+        let adapter = Adapter::new(params).expect("params").with(criterion);
+        let mut sim = Simulation::new(system, euler).with_adapter(adapter);
+        for _ in 0..10 {
+            sim.step(1e-3).expect("warm-up step");
+        }
+        let mut estimates = 0;
+        let count = allocations_during(|| {
+            for _ in 0..200 {
+                let report = sim.step(1e-3).expect("step");
+                estimates += usize::from(report.error_estimate.is_some());
+            }
+        });
+        assert!(estimates >= 5, "{estimates} estimates");
+        assert_eq!(count, 0, "{n} control points: {count} allocations");
+    }
+}

@@ -112,10 +112,29 @@ fn bad_adaptivity_values() {
         ),
         ("min_control_points = 1", "adaptivity.min_control_points"),
         ("colour = 1", "adaptivity.colour"),
+        ("tolerance = 0.0", "adaptivity.tolerance"),
+        ("tolerance = -1e-4", "adaptivity.tolerance"),
+        ("tolerance = nan", "adaptivity.tolerance"),
+        ("tolerance = inf", "adaptivity.tolerance"),
+        ("tolerance = \"small\"", "adaptivity.tolerance"),
+        (
+            "tolerance = 1e-4\ninsert_threshold = 0.05",
+            "adaptivity.insert_threshold",
+        ),
+        (
+            "tolerance = 1e-4\nremove_threshold = 0.001",
+            "adaptivity.remove_threshold",
+        ),
     ];
     for (line, field) in cases {
         rejects(&format!("[adaptivity]\n{line}"), field);
     }
+}
+
+/// `[output] error_estimate` must be a boolean.
+#[test]
+fn bad_error_estimate_flag() {
+    rejects("[output]\nerror_estimate = 1", "output.error_estimate");
 }
 
 #[test]

@@ -128,7 +128,8 @@ impl Adapter {
     }
 
     /// Runs the adapt step on `rod`; `interactions` are the material coordinates where
-    /// something acts on it; `estimate` (if any) goes to the criteria first; `on_change`
+    /// something acts on it; `estimate` (the one made for this step, if any) goes to the
+    /// criteria first; `on_change`
     /// sees the rod after every applied map.
     pub fn adapt(
         &mut self,
@@ -137,9 +138,7 @@ impl Adapter {
         estimate: Option<&ErrorEstimate>,
         on_change: &mut dyn FnMut(&Rod, &KnotMap),
     ) -> Result<AdaptReport, AdaptError> {
-        if let Some(estimate) = estimate {
-            self.criteria.iter_mut().for_each(|c| c.observe(estimate));
-        }
+        self.criteria.iter_mut().for_each(|c| c.observe(estimate));
         self.protected.retain_mut(|(_, steps)| {
             *steps = steps.saturating_sub(1);
             *steps > 0
@@ -163,6 +162,12 @@ impl Adapter {
             && self.criteria.iter().any(|c| c.rejects(estimate))
     }
 
+    /// Whether every criterion is content with `estimate` (see
+    /// [`RefinementCriterion::content`]): estimates may then come less often.
+    pub fn content(&self, estimate: &ErrorEstimate) -> bool {
+        self.criteria.iter().all(|c| c.content(estimate))
+    }
+
     /// One round of insertions only, from `estimate` (for the restored start of a
     /// rejected step); returns the knots inserted.
     pub fn refine(
@@ -172,7 +177,9 @@ impl Adapter {
         estimate: &ErrorEstimate,
         on_change: &mut dyn FnMut(&Rod, &KnotMap),
     ) -> Result<usize, AdaptError> {
-        self.criteria.iter_mut().for_each(|c| c.observe(estimate));
+        self.criteria
+            .iter_mut()
+            .for_each(|c| c.observe(Some(estimate)));
         self.insert_round(rod, interactions, on_change)
     }
 

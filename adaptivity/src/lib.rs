@@ -91,9 +91,9 @@ pub trait RefinementCriterion: Send + Sync {
     fn wants_estimate(&self) -> bool {
         false
     }
-    /// Receives the error estimate of the rod before an adapt step's marks. Default:
-    /// ignored.
-    fn observe(&mut self, estimate: &ErrorEstimate) {
+    /// Receives the error estimate of the rod before an adapt step's marks, or `None`
+    /// when no estimate was made for this step. Default: ignored.
+    fn observe(&mut self, estimate: Option<&ErrorEstimate>) {
         let _ = estimate;
     }
     /// Whether the step that produced `estimate` should be recomputed from its start on
@@ -101,6 +101,12 @@ pub trait RefinementCriterion: Send + Sync {
     fn rejects(&self, estimate: &ErrorEstimate) -> bool {
         let _ = estimate;
         false
+    }
+    /// Whether `estimate` is far enough within what this criterion asks that the next
+    /// estimates may come less often. Default true.
+    fn content(&self, estimate: &ErrorEstimate) -> bool {
+        let _ = estimate;
+        true
     }
 }
 

@@ -8,10 +8,11 @@
 //!   more knot there would remove more than `τ`: a point force on a string makes a
 //!   kink, which knots of multiplicity `d` represent exactly and no amount of span
 //!   halving does;
-//! * **coarsen**: propose removing an interior knot when the estimate on its two spans,
-//!   grown by `2^{d+1}` (the error of a span twice as long for a method of order
-//!   `d + 1`), plus the removal's bounded shape change stays below `coarsen · τ`
-//!   (default a quarter). Refining above `τ` and coarsening far below it is the
+//! * **coarsen**, only while the whole rod's estimate is within `τ`: propose removing an
+//!   interior knot when the estimate on its two spans, grown by `2^{d+1}` (the error of
+//!   a span twice as long for a method of order `d + 1`), plus the removal's bounded
+//!   shape change stays below `coarsen · τ` (default a quarter), and never two
+//!   neighbouring knots in one step. Refining above `τ` and coarsening far below it is the
 //!   hysteresis that keeps a knot from coming and going; the adapter adds its own
 //!   (a fresh knot stays for `hysteresis_steps`).
 //!
@@ -99,8 +100,20 @@ impl RefinementCriterion for ToleranceCriterion {
         true
     }
 
-    fn observe(&mut self, estimate: &ErrorEstimate) {
-        self.estimate.clone_from(estimate);
+    fn observe(&mut self, estimate: Option<&ErrorEstimate>) {
+        match estimate {
+            Some(e) => self.estimate.clone_from(e),
+            // Without a fresh estimate nothing is marked.
+            None => {
+                self.estimate.spans.clear();
+                self.estimate.corners.clear();
+                self.estimate.global = Real::INFINITY;
+            }
+        }
+    }
+
+    fn content(&self, estimate: &ErrorEstimate) -> bool {
+        estimate.max() <= self.coarsen * self.tolerance
     }
 
     fn rejects(&self, estimate: &ErrorEstimate) -> bool {
@@ -125,9 +138,20 @@ impl RefinementCriterion for ToleranceCriterion {
                 out.push(Refinement::Insert { at });
             }
         }
+        // Coarsen only a rod within tolerance, and never two neighbouring knots in one
+        // step (their spans would merge into one three times as long as estimated).
+        if self.estimate.max() > tol {
+            return;
+        }
+        let mut last_proposed: Option<Real> = None;
         for k in 0..knots.len() {
+            let previous = knots[..k].iter().rev().find(|&&x| x < knots[k]);
+            if previous.is_some() && previous == last_proposed.as_ref() {
+                continue;
+            }
             if self.removable(rod, interactions, k) {
                 out.push(Refinement::Remove { knot: k });
+                last_proposed = Some(knots[k]);
             }
         }
     }

@@ -89,7 +89,9 @@ fn adapt_step_respects_limits_and_keeps_the_shape() {
         .unwrap()
         .with(CurvatureCriterion::default());
     let mut maps = 0;
-    let report = adapter.adapt(&mut rod, &[], None, &mut |_, _| maps += 1).unwrap();
+    let report = adapter
+        .adapt(&mut rod, &[], None, &mut |_, _| maps += 1)
+        .unwrap();
     assert!(report.inserted > 0 && rod.len() <= 14);
     assert_eq!(maps, report.inserted + report.removed);
     for (a, b) in before.iter().zip(samples(&rod)) {
@@ -138,11 +140,15 @@ fn interaction_criterion_inserts_once_and_protects_its_knot() {
         .unwrap()
         .with(c)
         .with(CurvatureCriterion::default());
-    let report = adapter.adapt(&mut rod, &[0.3], None, &mut |_, _| {}).unwrap();
+    let report = adapter
+        .adapt(&mut rod, &[0.3], None, &mut |_, _| {})
+        .unwrap();
     assert_eq!(report.inserted, 1);
     assert_eq!(rod.knot_multiplicity(0.3), 1);
     for _ in 0..30 {
-        adapter.adapt(&mut rod, &[0.3], None, &mut |_, _| {}).unwrap();
+        adapter
+            .adapt(&mut rod, &[0.3], None, &mut |_, _| {})
+            .unwrap();
         assert_eq!(rod.knot_multiplicity(0.3), 1, "the grabbed knot must stay");
     }
     assert!(InteractionCriterion::new(0.0).is_err());

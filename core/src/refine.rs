@@ -82,7 +82,8 @@ pub fn bspline_refinement(
             })?;
         let mu = (d + old[d + 1..n_old].partition_point(|&t| t <= new[k])).min(n_old - 1);
         op.first.push(mu - d);
-        op.weights.push(blossom_weights(d, old, mu, &new[j + 1..=j + d]));
+        op.weights
+            .push(blossom_weights(d, old, mu, &new[j + 1..=j + d]));
     }
     Ok(())
 }

@@ -11,11 +11,11 @@
 //!
 //! Knot insertion changes the basis but not the curve, its velocity, nor any of these.
 
-use crate::refine::RefinementOperator;
 use crate::banded::SymBanded;
 use crate::basis::{greville, BasisSpace, BasisValues, MAX_DEGREE};
 use crate::knot_map::KnotMap;
 use crate::quadrature::{GaussLegendre, QuadratureTable};
+use crate::refine::RefinementOperator;
 use crate::{CoreError, Real};
 use nalgebra::Vector3;
 
