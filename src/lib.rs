@@ -52,6 +52,7 @@ pub mod observe;
 pub mod output;
 pub mod problems;
 pub mod report;
+pub mod report_adaptive;
 mod report_md;
 mod run_ensemble;
 pub mod runner;

@@ -14,6 +14,9 @@
 //! * Locking: the static catenary against the exact elastic catenary from EA = 10² to
 //!   10⁹ N for both stretching formulations, with the lumped-chain peers' EA-independent
 //!   error ([`crate::locking`]).
+//! * Adaptivity: tolerance-driven against uniform resolution, error against control
+//!   points and wall time, effectivity of the error estimate
+//!   ([`crate::report_adaptive`]).
 //!
 //! The catenary and string sweeps use the default (mixed) stretching; the static
 //! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
@@ -76,6 +79,8 @@ pub struct Report {
     pub modal: Vec<(usize, Real, Real)>,
     /// Time-stepped string.
     pub strings: Vec<StringSample>,
+    /// Adaptive against uniform resolution, per problem.
+    pub adaptive: Vec<crate::report_adaptive::AdaptiveSweep>,
 }
 
 fn sizes(
@@ -142,6 +147,7 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
             report.strings.push(string_sample(name, dt, ft)?);
         }
     }
+    report.adaptive = crate::report_adaptive::measure(quick)?;
     Ok(report)
 }
 
@@ -234,6 +240,7 @@ pub fn write_report(dir: &Path, quick: bool) -> Result<Report, Error> {
     })?;
     let report = measure(quick)?;
     plot_all(dir, &report)?;
+    crate::report_adaptive::plot(dir, &report.adaptive)?;
     let text = crate::report_md::markdown(&report, quick);
     let path = dir.join("report.md");
     std::fs::write(&path, text).map_err(|source| Error::Io {

@@ -25,6 +25,7 @@ pub fn markdown(r: &Report, quick: bool) -> String {
     locking(&mut out, r);
     dynamics(&mut out, r);
     strings(&mut out, r);
+    crate::report_adaptive::markdown(&mut out, &r.adaptive);
     out
 }
 
