@@ -43,7 +43,8 @@ pub struct ErrorEstimation {
 }
 
 /// When estimates are made: every step while the resolution, the interactions or the
-/// estimate change; the interval doubles (up to [`MAX_INTERVAL`]) while they do not.
+/// estimate change or the adapter is not content with it; the interval doubles (up to
+/// [`MAX_INTERVAL`]) while none of that happens.
 #[derive(Debug, Default)]
 struct Schedule {
     /// Steps between estimates now (0 before the first).
@@ -57,10 +58,13 @@ struct Schedule {
 }
 
 /// Most steps between two estimates of a steady rod.
-pub const MAX_INTERVAL: usize = 32;
+pub const MAX_INTERVAL: usize = 64;
 
 /// An estimate within this fraction of the previous one counts as steady.
 const STEADY: Real = 0.25;
+
+/// An estimate below this fraction of the rest length counts as steady whatever it did.
+const NEGLIGIBLE: Real = 1e-9;
 
 /// Buffers of the finer problem, kept between estimates.
 #[derive(Debug, Default)]
@@ -88,15 +92,20 @@ impl ErrorEstimation {
             || s.interactions != interactions
     }
 
-    /// Records the estimate just made for the schedule; `calm`: the adapter is content
-    /// with it (far within its tolerance), so the interval may grow if it is steady.
-    pub fn schedule(&mut self, rod: &Rod, interactions: &[Real], calm: bool) {
+    /// Records the estimate just made for the schedule. The interval doubles when the
+    /// adapter is `content` with it (far within its tolerance; `None`: no adapter), the
+    /// knots are the last estimate's and the estimate is steady (within [`STEADY`] of
+    /// the last, or negligible).
+    pub fn schedule(&mut self, rod: &Rod, interactions: &[Real], content: Option<bool>) {
         let s = &mut self.schedule;
         let error = self.estimator.estimate.max();
-        let steady = calm
+        // Below NEGLIGIBLE · L an estimate is round-off and Newton tolerance, not a trend.
+        let negligible = error <= NEGLIGIBLE * rod.material().rest_length;
+        let unchanged = negligible || (error - s.error).abs() <= STEADY * s.error;
+        let steady = content.unwrap_or(true)
+            && unchanged
             && s.interval > 0
-            && s.knots == rod.basis().knots()
-            && (error - s.error).abs() <= STEADY * s.error;
+            && s.knots == rod.basis().knots();
         s.interval = if steady {
             (2 * s.interval).min(MAX_INTERVAL)
         } else {
@@ -262,7 +271,7 @@ pub struct EstimateOutput {
     pub estimated_error: Real,
     /// `[t, control points, estimated error]` after every step that changed the
     /// resolution and at least every 0.05 s (of the estimates made: while the rod is
-    /// steady they are up to 32 steps apart); the count is that of the rod estimated
+    /// steady they are up to 64 steps apart); the count is that of the rod estimated
     /// (the step's, before its adapt stage).
     pub history: Vec<[Real; 3]>,
 }

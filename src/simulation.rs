@@ -29,8 +29,11 @@ pub struct StepReport {
     pub adapt: AdaptReport,
     /// Control points after the step.
     pub control_points: usize,
-    /// Wall time of the integration stage, s.
+    /// Wall time of the integration stage, s (recomputed steps included).
     pub integrate_seconds: Real,
+    /// Wall time of the adapt stage, s: error estimate, marks and knot maps (of rejected
+    /// steps too).
+    pub adapt_seconds: Real,
     /// Sub-steps taken, rejected and the shortest one (see [`crate::substep`]).
     pub substeps: SubstepCounts,
     /// Contacts at the end of the step (`None` without contact).
@@ -116,23 +119,32 @@ impl Simulation {
         }
         let start = Instant::now();
         let mut redone = 0;
+        let mut adapt_seconds = 0.0;
         let (solver, substeps, fresh) = loop {
             let (solver, substeps) = self.integrate_or_restore(dt)?;
             self.last_dt = dt;
+            let stage = Instant::now();
             let fresh = self.estimate_if_due()?;
-            if fresh && redone < MAX_REDONE_STEPS && self.rejected() {
+            let rejected = fresh && redone < MAX_REDONE_STEPS && self.rejected();
+            let inserted = if rejected {
                 self.restore();
-                if self.refine_for_redo()? > 0 {
-                    redone += 1;
-                    continue;
-                }
+                self.refine_for_redo()?
+            } else {
+                0
+            };
+            adapt_seconds += stage.elapsed().as_secs_f64();
+            if inserted > 0 {
+                redone += 1;
+                continue;
+            }
+            if rejected {
                 // Nothing could be inserted: the same step again, accepted.
                 let (solver, substeps) = self.integrate_or_restore(dt)?;
                 break (solver, substeps, fresh);
             }
             break (solver, substeps, fresh);
         };
-        let integrate_seconds = start.elapsed().as_secs_f64();
+        let integrate_seconds = start.elapsed().as_secs_f64() - adapt_seconds;
         self.time += dt;
         self.system.time = self.time;
         self.steps += 1;
@@ -142,7 +154,9 @@ impl Simulation {
         if !self.integrator.conserves_energy() {
             self.system.update_multipliers(false);
         }
+        let stage = Instant::now();
         let mut adapt = self.apply_adapter(fresh)?;
+        adapt_seconds += stage.elapsed().as_secs_f64();
         adapt.redone_steps = redone;
         let error_estimate = fresh
             .then(|| self.error_estimate().map(|e| e.max()))
@@ -154,6 +168,7 @@ impl Simulation {
             adapt,
             control_points: self.system.rod.len(),
             integrate_seconds,
+            adapt_seconds,
             substeps,
             contact,
             error_estimate,
@@ -250,8 +265,8 @@ impl Simulation {
             &self.saved.1,
             self.last_dt,
         )?;
-        let calm = self.adapter.as_ref().is_none_or(|a| a.content(estimate));
-        e.schedule(&self.system.rod, &self.interactions, calm);
+        let content = self.adapter.as_ref().map(|a| a.content(estimate));
+        e.schedule(&self.system.rod, &self.interactions, content);
         Ok(true)
     }
 
