@@ -55,6 +55,7 @@ pub mod report;
 pub mod report_adaptive;
 mod report_md;
 mod run_ensemble;
+mod run_summary;
 pub mod runner;
 pub mod scene;
 mod scene_adapt;
