@@ -18,6 +18,7 @@ use crate::quadrature::{GaussLegendre, QuadratureTable};
 use crate::refine::RefinementOperator;
 use crate::{CoreError, Real};
 use nalgebra::Vector3;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Material constants of a rod that the core needs (energies carry their own stiffness).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,7 +117,7 @@ impl Rod {
             quadrature: QuadratureTable::default(),
             mass: SymBanded::default(),
             lumped: Vec::new(),
-            topology_epoch: 0,
+            topology_epoch: next_epoch(),
         };
         rod.rebuild_caches(GaussLegendre::points_for_degree(rod.basis.degree()))?;
         Ok(rod)
@@ -170,7 +171,7 @@ impl Rod {
             quadrature: QuadratureTable::default(),
             mass: SymBanded::default(),
             lumped: Vec::new(),
-            topology_epoch: self.topology_epoch,
+            topology_epoch: next_epoch(),
         };
         op.apply(&self.positions, &mut rod.positions);
         op.apply(&self.velocities, &mut rod.velocities);
@@ -229,8 +230,9 @@ impl Rod {
     pub fn lumped_masses(&self) -> &[Real] {
         &self.lumped
     }
-    /// Counter incremented by every change of basis; solvers redo their symbolic
-    /// analysis when it changes.
+    /// Identifies the rod's basis: a new value, unique in the process, at every change
+    /// of knots (and for every new rod or refined copy); caches keyed on it (solvers'
+    /// symbolic analyses, contact samples) know when to rebuild.
     pub fn topology_epoch(&self) -> u64 {
         self.topology_epoch
     }
@@ -331,7 +333,7 @@ impl Rod {
     fn after_knot_change(&mut self, map: KnotMap) -> Result<KnotMap, CoreError> {
         map.apply_in_place(&mut self.positions);
         map.apply_in_place(&mut self.velocities);
-        self.topology_epoch += 1;
+        self.topology_epoch = next_epoch();
         crate::local_update::update_caches(
             &map,
             self.basis.as_ref(),
@@ -342,6 +344,15 @@ impl Rod {
         )?;
         Ok(map)
     }
+}
+
+/// Source of topology epochs: unique across all rods of the process, so a cache keyed on
+/// an epoch never mistakes one basis for another (a scratch copy refined from a rod gets
+/// its own). Only equality of epochs means anything; their values do not enter results.
+static NEXT_EPOCH: AtomicU64 = AtomicU64::new(1);
+
+fn next_epoch() -> u64 {
+    NEXT_EPOCH.fetch_add(1, Ordering::Relaxed)
 }
 
 /// Error naming the first non-finite vector of `field`.

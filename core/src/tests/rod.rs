@@ -104,11 +104,15 @@ fn knot_insertion_changes_no_physical_quantity() {
             .iter()
             .map(|&s| (rod.point(s).unwrap(), rod.velocity(s).unwrap()))
             .collect();
-        let epoch = rod.topology_epoch();
+        let mut epochs = vec![rod.topology_epoch()];
         for f in [0.3, 0.31, 0.8] {
             rod.insert_knot(f * l).unwrap();
+            epochs.push(rod.topology_epoch());
         }
-        assert_eq!(rod.topology_epoch(), epoch + 3);
+        // Every change of basis gets a new epoch.
+        epochs.sort_unstable();
+        epochs.dedup();
+        assert_eq!(epochs.len(), 4);
         assert!((rod.kinetic_energy() - ke).abs() < 1e-13 * ke);
         assert!((rod.linear_momentum() - p).norm() < 1e-13 * p.norm());
         assert!((rod.centre_of_mass() - c).norm() < 1e-13 * (1.0 + c.norm()));
