@@ -125,7 +125,8 @@ impl ErrorEstimation {
     }
 
     /// Estimates the error of `system`'s rod after a step of `dt` seconds that started
-    /// with velocities `start` (ignored if its length differs: no inertial load).
+    /// with velocities `start` (ignored if its length differs: no inertial load); `dt`
+    /// = 0 estimates a static equilibrium (no inertia at all).
     pub fn run(
         &mut self,
         system: &RodSystem,
@@ -134,7 +135,12 @@ impl ErrorEstimation {
         dt: Real,
     ) -> Result<&ErrorEstimate, Error> {
         let pendulum = (system.rod.material().rest_length / STANDARD_GRAVITY).sqrt();
-        let elapsed = system.time.max(MIN_STEPS_ACTING * dt).min(pendulum);
+        // A static equilibrium (no step: `dt` = 0) has no inertial bound.
+        let elapsed = if dt > 0.0 {
+            system.time.max(MIN_STEPS_ACTING * dt).min(pendulum)
+        } else {
+            0.0
+        };
         let rod = &system.rod;
         self.acceleration.clear();
         if start.len() == rod.len() && dt > 0.0 {

@@ -1,7 +1,7 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
-use crate::estimate::EstimateOutput;
+use crate::estimate::{ErrorEstimation, EstimateOutput};
 use crate::knot_track::KnotTrack;
 use crate::observe::{Frame, Observer};
 use crate::scene::{MemberSummary, Method, Scene};
@@ -293,6 +293,13 @@ fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunR
     };
     tally.pin_forces = solver.pin_forces().to_vec();
     tally.contact(&system)?;
+    if scene.output.error_estimate {
+        let grabs = system.grabs.iter().map(|g| g.spring.at).collect::<Vec<_>>();
+        let mut estimation = ErrorEstimation::default();
+        let e = estimation.run(&system, &grabs, &[], 0.0)?;
+        let out = tally.estimates.get_or_insert_default();
+        out.record(0.0, e.control_points, e.max(), true);
+    }
     let result = finish(scene, &system, tally)?;
     notify_finish(observers, &frame(scene, &system, 0.0, 0), result)
 }

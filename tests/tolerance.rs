@@ -161,3 +161,20 @@ fn estimates_are_deterministic() {
     assert_eq!(ea.history, eb.history);
     assert_eq!(a.samples.positions, b.samples.positions);
 }
+
+/// `[output] error_estimate` on a static solve: the equilibrium's estimate against the
+/// exact elastic catenary, at fixed resolutions.
+#[test]
+fn static_solves_report_an_honest_estimate() {
+    for n in [8, 16, 32] {
+        let mut scene =
+            splinerod::problems::catenary_scene(n, 0.0, "method = \"static\"").expect("scene");
+        scene.output.error_estimate = true;
+        let run = splinerod::run(&scene).expect("static solve");
+        let error = splinerod::problems::catenary_error(&run).expect("error");
+        let estimate = run.adaptivity.expect("estimate").estimated_error;
+        let e = estimate / error;
+        println!("static, {n} points: error {error:.2e}, estimate {estimate:.2e} ({e:.2})");
+        assert!((0.5..=2.0).contains(&e), "{n} points: effectivity {e}");
+    }
+}
