@@ -3,7 +3,6 @@ mod basis;
 mod knots;
 mod local_update;
 mod proximity;
-mod refine;
 mod rod;
 
 use crate::{BSplineSpace, BasisSpace, Real};
