@@ -130,7 +130,7 @@ fn ensemble_rate(count: usize, steps: usize, threads: usize) -> Result<Real, Err
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| Error::Scene(format!("thread pool: {e}")))?;
+        .map_err(|e| Error::ThreadPool(e.to_string()))?;
     pool.install(|| {
         let members = (0..count)
             .map(|_| {

@@ -1,7 +1,7 @@
 //! Cost of the adapt stage (error estimate, marks, maps) for `splinerod bench`: the
 //! step of [`crate::bench`]'s cable with a tolerance-driven adapter whose tolerance is
 //! never reached (so the resolution stays and only the stage's cost is measured). The
-//! stage is timed inside each step ([`crate::StepReport::adapt_seconds`]) and summed, so
+//! stage is timed inside each step ([`crate::StepReport::stages`]) and summed, so
 //! the figures do not depend on two separate runs agreeing on the machine's speed.
 
 use crate::bench::one_iteration;
@@ -33,7 +33,7 @@ fn stage_and_step(n: usize, reps: usize) -> Result<(Real, Real), Error> {
         let t = Instant::now();
         let report = sim.step(1e-3)?;
         whole += t.elapsed().as_secs_f64();
-        stage += report.adapt_seconds;
+        stage += report.stages.adapt;
     }
     Ok((stage, whole))
 }

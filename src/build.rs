@@ -10,8 +10,50 @@ use splinerod_adaptivity::{
 use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
 use splinerod_energies::{Bending, Clamp, Gravity, StretchFormulation, Stretching};
 use splinerod_integrators::{
-    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, LinearSolverKind, NewtonParams, StaticParams,
+    Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, LinearSolverKind, NewtonParams,
+    StaticParams, StaticSolver,
 };
+
+impl Method {
+    /// Every method with its name in scene files.
+    pub const NAMES: [(Method, &'static str); 4] = [
+        (Method::ImplicitEuler, "implicit-euler"),
+        (Method::ImplicitMidpoint, "implicit-midpoint"),
+        (Method::Bdf2, "bdf2"),
+        (Method::Static, "static"),
+    ];
+
+    /// The method's name in scene files.
+    pub fn name(self) -> &'static str {
+        let found = Self::NAMES.iter().find(|(m, _)| *m == self);
+        found.map_or("static", |(_, name)| name)
+    }
+
+    /// The method called `name` in scene files; an unknown name is an error naming it.
+    pub fn from_name(name: &str) -> Result<Method, Error> {
+        let found = Self::NAMES.iter().find(|(_, n)| *n == name);
+        found.map(|(m, _)| *m).ok_or_else(|| {
+            let known: Vec<_> = Self::NAMES.iter().map(|(_, n)| *n).collect();
+            let reason = format!("unknown method; expected one of {}", known.join(", "));
+            Error::field("solver.method", format!("\"{name}\""), reason)
+        })
+    }
+
+    /// The integrator of this method: a time integrator with `newton`, or the static
+    /// solver with `statics`.
+    pub fn integrator(
+        self,
+        newton: NewtonParams,
+        statics: StaticParams,
+    ) -> Result<Box<dyn Integrator>, Error> {
+        Ok(match self {
+            Method::ImplicitEuler => Box::new(ImplicitEuler::new(newton)?),
+            Method::ImplicitMidpoint => Box::new(ImplicitMidpoint::new(newton)?),
+            Method::Bdf2 => Box::new(Bdf2::new(newton)?),
+            Method::Static => Box::new(StaticSolver::new(statics)?),
+        })
+    }
+}
 
 impl Scene {
     /// The basis space on `[0, L]` described by `rod.knots`.
@@ -134,7 +176,9 @@ impl Scene {
             let grab = Grab::new(g.at * l, Vector3::from(g.to), times, g.stiffness)?;
             system = system.with_grab(grab);
         }
-        system.contact = self.contact()?;
+        if let Some(contact) = self.contact()? {
+            system = system.with_energy(contact);
+        }
         Ok(system)
     }
 
@@ -202,17 +246,14 @@ impl Scene {
         }
     }
 
-    /// The time integrator named by `solver.method` (implicit Euler for `static`).
+    /// The integrator named by `solver.method` (the static solver for `static`).
     pub fn integrator(&self) -> Result<Box<dyn Integrator>, Error> {
-        let p = self.newton_params();
-        Ok(match self.solver.method {
-            Method::ImplicitMidpoint => Box::new(ImplicitMidpoint::new(p)?),
-            Method::Bdf2 => Box::new(Bdf2::new(p)?),
-            Method::ImplicitEuler | Method::Static => Box::new(ImplicitEuler::new(p)?),
-        })
+        let method = self.solver.method;
+        method.integrator(self.newton_params(), self.static_params())
     }
 
-    /// A time-stepping simulation of the scene.
+    /// The simulation of the scene (for `method = "static"`, with the static solver:
+    /// [`Simulation::settle`] solves the equilibrium).
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = self.integrator()?;
         let mut sim = Simulation::new(self.build_system()?, integrator);

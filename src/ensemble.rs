@@ -37,24 +37,39 @@ impl Ensemble {
     /// whose step fails keep their state; the error of the first failing member (by
     /// index) is returned after all members have been tried.
     pub fn step(&mut self, dt: Real) -> Result<(), Error> {
+        self.each(|sim| sim.step(dt))
+    }
+
+    /// Every member's [`Simulation::settle`] (the static solve), as [`Ensemble::step`].
+    pub fn settle(&mut self) -> Result<(), Error> {
+        self.each(Simulation::settle)
+    }
+
+    /// Runs `stage` on every member, recording the reports.
+    fn each(
+        &mut self,
+        stage: impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
+    ) -> Result<(), Error> {
         self.reports
             .resize(self.members.len(), StepReport::default());
-        let first_error = step_all(&mut self.members, &mut self.reports, dt);
-        match first_error {
-            Some((index, e)) => Err(Error::Scene(format!("ensemble member {index}: {e}"))),
+        match stage_all(&mut self.members, &mut self.reports, &stage) {
+            Some((index, e)) => Err(Error::Member {
+                index,
+                source: Box::new(e),
+            }),
             None => Ok(()),
         }
     }
 }
 
-/// Steps one member, recording its report; the error with the member's index.
-fn step_one(
+/// The stage of one member, recording its report; the error with the member's index.
+fn stage_one(
     i: usize,
     sim: &mut Simulation,
     report: &mut StepReport,
-    dt: Real,
+    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
 ) -> Option<(usize, Error)> {
-    match sim.step(dt) {
+    match stage(sim) {
         Ok(r) => {
             *report = r;
             None
@@ -64,29 +79,29 @@ fn step_one(
 }
 
 #[cfg(feature = "parallel")]
-fn step_all(
+fn stage_all(
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    dt: Real,
+    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
 ) -> Option<(usize, Error)> {
     use rayon::prelude::*;
     members
         .par_iter_mut()
         .zip(reports.par_iter_mut())
         .enumerate()
-        .filter_map(|(i, (sim, report))| step_one(i, sim, report, dt))
+        .filter_map(|(i, (sim, report))| stage_one(i, sim, report, stage))
         .min_by_key(|(i, _)| *i)
 }
 
 #[cfg(not(feature = "parallel"))]
-fn step_all(
+fn stage_all(
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    dt: Real,
+    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
 ) -> Option<(usize, Error)> {
     let mut first = None;
     for (i, (sim, report)) in members.iter_mut().zip(reports.iter_mut()).enumerate() {
-        if let Some(e) = step_one(i, sim, report, dt) {
+        if let Some(e) = stage_one(i, sim, report, stage) {
             first.get_or_insert(e);
         }
     }

@@ -8,9 +8,46 @@ use splinerod_integrators::IntegratorError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// A scene value is missing, unknown, malformed or out of range.
-    #[error("scene: {0}")]
-    Scene(String),
+    /// A scene file is not valid TOML for a scene (syntax, an unknown or missing key, a
+    /// value of the wrong type); where it is known, the file and position.
+    #[error("{}{}{message}", file.as_ref().map(|f| format!("{f}: ")).unwrap_or_default(), position.map(|(l, c)| format!("line {l}, column {c}: ")).unwrap_or_default())]
+    Parse {
+        /// The file, if read from one.
+        file: Option<String>,
+        /// Line and column (1-based) of the offending text, if known.
+        position: Option<(usize, usize)>,
+        /// What the parser said.
+        message: String,
+    },
+    /// A required scene field is missing; names it.
+    #[error("missing field `{field}` ({reason})")]
+    MissingField {
+        /// Dotted path of the field.
+        field: String,
+        /// When it is required.
+        reason: String,
+    },
+    /// A known-answer problem or study could not be evaluated (its embedded reference
+    /// data are malformed, or the run did not show what is measured).
+    #[error("{problem}: {reason}")]
+    Study {
+        /// The problem.
+        problem: String,
+        /// What went wrong.
+        reason: String,
+    },
+    /// Writing JSON failed.
+    #[error("JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// The thread pool could not be built.
+    #[error("thread pool: {0}")]
+    ThreadPool(String),
+    /// The command needs a cargo feature this build does not have.
+    #[error("this needs the `{0}` feature")]
+    FeatureMissing(&'static str),
+    /// An observer stopped the run.
+    #[error("stopped by an observer: {0}")]
+    Stopped(String),
     /// A scene field is out of range; names the field and the value.
     #[error("scene field `{field}` = {value}: {reason}")]
     InvalidField {
@@ -29,6 +66,25 @@ pub enum Error {
         /// What the OS said.
         source: std::io::Error,
     },
+    /// The rod's knots changed (or the rod was replaced) without the energies hearing of
+    /// it; change knots through `RodSystem::change_knots` (or `insert_knot`,
+    /// `remove_knot`, `cut`).
+    #[error(
+        "the rod's knots changed without its energies hearing of it: change knots through \
+         RodSystem::change_knots (or insert_knot, remove_knot, cut)"
+    )]
+    KnotsChangedUnheard,
+    /// `Simulation::settle` needs an equilibrium solver; names the integrator given.
+    #[error("settling needs an equilibrium solver (method = \"static\"), not `{0}`")]
+    NotAnEquilibriumSolver(String),
+    /// A member of an ensemble failed; names it.
+    #[error("ensemble member {index}: {source}")]
+    Member {
+        /// Index of the member.
+        index: usize,
+        /// What went wrong.
+        source: Box<Error>,
+    },
     /// From the core (basis, knots, rod).
     #[error(transparent)]
     Core(#[from] CoreError),
@@ -41,6 +97,14 @@ pub enum Error {
 }
 
 impl Error {
+    /// An [`Error::Study`].
+    pub fn study(problem: impl Into<String>, reason: impl Into<String>) -> Self {
+        Self::Study {
+            problem: problem.into(),
+            reason: reason.into(),
+        }
+    }
+
     /// An [`Error::InvalidField`].
     pub fn field(
         field: impl Into<String>,

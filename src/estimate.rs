@@ -4,9 +4,8 @@
 //!
 //! \\[ \hat r = \nabla \hat E + \hat M (\hat a + \alpha \hat v), \\]
 //!
-//! with every acting energy (energies with per-coefficient data through
-//! [`Energy::for_finer_rod`]; contact without friction, whose frozen data belong to the
-//! step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
+//! with every acting energy (through [`Energy::for_finer_rod`] where an energy's data
+//! follow the rod's basis or belong to the step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
 //! exactly onto the finer basis, and zero on coefficients a pin holds.
 //!
 //! The stiffness is the potential's definite Hessian plus \(2\hat M / t^2\), `t` the
@@ -21,7 +20,7 @@ use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use splinerod_adaptivity::{AdaptError, ErrorEstimate, Estimator, FineProblem};
 use splinerod_core::{BlockBanded, HessianKind, Real, RefinementOperator, Rod};
-use splinerod_energies::{Contact, Energy};
+use splinerod_energies::Energy;
 use splinerod_integrators::linear::LinearSolver;
 
 /// The fewest steps a residual is taken to have acted for (the inertial bound's time is
@@ -35,8 +34,6 @@ const STANDARD_GRAVITY: Real = 9.81;
 #[derive(Debug, Default)]
 pub struct ErrorEstimation {
     estimator: Estimator,
-    /// Frictionless copy of the system's contact, evaluated on the finer rod.
-    contact: Option<Contact>,
     acceleration: Vec<Vector3<Real>>,
     scratch: Scratch,
     schedule: Schedule,
@@ -151,16 +148,8 @@ impl ErrorEstimation {
                 .map(|(v, v0)| (v - v0) / dt);
             self.acceleration.extend(a);
         }
-        if let Some(c) = &system.contact {
-            if self.contact.is_none() {
-                let mut params = *c.params();
-                params.friction = 0.0;
-                self.contact = Some(Contact::new(params)?);
-            }
-        }
         let mut problem = Mechanics {
             system,
-            contact: self.contact.as_ref().filter(|_| system.contact.is_some()),
             acceleration: &self.acceleration,
             scratch: &mut self.scratch,
             elapsed,
@@ -171,7 +160,6 @@ impl ErrorEstimation {
 
 struct Mechanics<'a> {
     system: &'a RodSystem,
-    contact: Option<&'a Contact>,
     acceleration: &'a [Vector3<Real>],
     scratch: &'a mut Scratch,
     /// Simulated time so far, s (0: no inertial bound, a static estimate).
@@ -188,9 +176,6 @@ impl Mechanics<'_> {
             }
         }
         self.system.active_grabs().for_each(&mut f);
-        if let Some(c) = self.contact {
-            f(c);
-        }
     }
 }
 
@@ -291,8 +276,12 @@ impl EstimateOutput {
             .history
             .last()
             .is_none_or(|h| t >= h[0] + HISTORY_INTERVAL * (1.0 - 1e-9));
-        if changed || due {
-            self.history.push([t, control_points as Real, error]);
+        let entry = [t, control_points as Real, error];
+        match self.history.last_mut() {
+            // A second estimate of the same state (the run's final one) replaces it.
+            Some(last) if last[0] == t && last[1] == entry[1] => *last = entry,
+            _ if changed || due => self.history.push(entry),
+            _ => {}
         }
     }
 }

@@ -54,7 +54,7 @@ pub mod problems;
 pub mod report;
 pub mod report_adaptive;
 mod report_md;
-mod run_ensemble;
+mod run_loop;
 mod run_summary;
 pub mod runner;
 pub mod scene;
@@ -64,6 +64,7 @@ mod scene_ensemble;
 mod scene_shape;
 mod scene_solver;
 mod simulation;
+pub mod step_report;
 pub mod substep;
 mod system;
 
@@ -74,7 +75,8 @@ pub use knot_track::KnotTrack;
 pub use observe::{Frame, Observer};
 pub use runner::{run, run_observed, RunResult};
 pub use scene::Scene;
-pub use simulation::{Simulation, StepReport};
+pub use simulation::Simulation;
+pub use step_report::{StageTimes, StepReport};
 pub use system::RodSystem;
 
 pub use splinerod_adaptivity as adaptivity;

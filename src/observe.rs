@@ -2,8 +2,8 @@
 //! files, per-step statistics, a progress bar) implements [`Observer`] and is handed to
 //! [`crate::runner::run_observed`]. The runner calls [`Observer::start`] once before the
 //! first step, [`Observer::step`] after every step (after adaptivity and cuts), and
-//! [`Observer::finish`] with the final result. A static solve has no steps: `start` sees
-//! the initial state and `finish` the equilibrium.
+//! [`Observer::finish`] with the final result. A static solve is one stage: `start`
+//! sees the initial state, `step` (with step count 0) and `finish` the equilibrium.
 
 use crate::{Error, RodSystem, RunResult, Scene, StepReport};
 use splinerod_core::Real;

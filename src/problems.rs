@@ -43,7 +43,7 @@ pub struct StringReference {
 }
 
 fn parse<T: for<'de> Deserialize<'de>>(text: &str, what: &str) -> Result<T, Error> {
-    serde_json::from_str(text).map_err(|e| Error::Scene(format!("embedded {what}: {e}")))
+    serde_json::from_str(text).map_err(|e| Error::study(what, format!("embedded data: {e}")))
 }
 
 /// The embedded catenary reference.
@@ -83,7 +83,7 @@ pub fn catenary_scene_with(
 pub fn catenary_error(result: &RunResult) -> Result<Real, Error> {
     let reference = catenary_reference()?;
     if result.samples.positions.len() != reference.xy.len() {
-        return Err(Error::Scene("the catenary run needs 41 samples".into()));
+        return Err(Error::study("catenary", "the run needs 41 samples"));
     }
     let pairs = result.samples.positions.iter().zip(&reference.xy);
     Ok(pairs
@@ -132,7 +132,7 @@ pub fn string_modes_with(n: usize, formulation: StretchFormulation) -> Result<(M
         let found = modes.iter().find(|m| (axial(m) > 0.5) == want_axial);
         found
             .cloned()
-            .ok_or_else(|| Error::Scene("string mode not found".into()))
+            .ok_or_else(|| Error::study("string modes", "mode not found"))
     };
     Ok((find(false)?, find(true)?))
 }

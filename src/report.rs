@@ -31,7 +31,7 @@ use crate::scene::Scene;
 use crate::{run, Error};
 use splinerod_core::Real;
 use splinerod_energies::StretchFormulation;
-use splinerod_integrators::{Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, NewtonParams};
+use splinerod_integrators::{Integrator, NewtonParams, StaticParams};
 use std::path::Path;
 
 /// One solver configuration at one resolution: error and cost.
@@ -213,17 +213,18 @@ fn fitted_order(samples: &[Sample]) -> Real {
 }
 
 fn integrator(name: &str) -> Result<Box<dyn Integrator>, Error> {
-    let p = NewtonParams::default();
-    Ok(match name {
-        "implicit-midpoint" => Box::new(ImplicitMidpoint::new(p)?),
-        "bdf2" => Box::new(Bdf2::new(p)?),
-        _ => Box::new(ImplicitEuler::new(p)?),
-    })
+    let method = crate::scene::Method::from_name(name)?;
+    method.integrator(NewtonParams::default(), StaticParams::default())
 }
 
 fn string_sample(name: &str, dt: Real, exact: Real) -> Result<StringSample, Error> {
     let run = pluck(integrator(name)?, dt, 4.0)?;
-    let missing = || Error::Scene(format!("{name} at dt = {dt}: the string did not oscillate"));
+    let missing = || {
+        Error::study(
+            format!("{name} at dt = {dt}"),
+            "the string did not oscillate",
+        )
+    };
     Ok(StringSample {
         integrator: name.into(),
         dt,

@@ -1,18 +1,17 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
-use crate::estimate::{ErrorEstimation, EstimateOutput};
+use crate::estimate::EstimateOutput;
 use crate::knot_track::KnotTrack;
 use crate::observe::{Frame, Observer};
-use crate::scene::{MemberSummary, Method, Scene};
-use crate::{Error, RodSystem, StepReport};
-use nalgebra::Vector3;
+use crate::run_loop::Tally;
+use crate::scene::{MemberSummary, Scene};
+use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
 use serde::Serialize;
 use splinerod_core::Real;
 use splinerod_energies::ContactSummary;
-use splinerod_integrators::{StaticSolver, StepStats};
 use std::collections::BTreeMap;
-use std::time::Instant;
+use std::ops::AddAssign;
 
 /// Positions of evenly spaced material points at the end.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -60,6 +59,12 @@ pub struct SolverTotals {
     /// Multiplier updates of an inextensible rod (static: until the mean strain of every
     /// tension function is below 1e-12; dynamic: one per step).
     pub multiplier_updates: usize,
+    /// Knots the adapt stage inserted.
+    pub knots_inserted: usize,
+    /// Knots the adapt stage removed.
+    pub knots_removed: usize,
+    /// Steps recomputed on a finer basis because their error estimate was rejected.
+    pub redone_steps: usize,
 }
 
 /// Contact over the run (scenes with `[contact]`).
@@ -73,14 +78,58 @@ pub struct ContactStats {
 }
 
 impl ContactStats {
-    /// Folds in one contact summary of a rod of radius `radius`.
-    pub(crate) fn add(&mut self, summary: &ContactSummary, radius: Real) {
+    /// Folds in one contact summary.
+    pub(crate) fn add(&mut self, summary: &ContactSummary) {
         self.max_pairs = self.max_pairs.max(summary.pairs);
-        if let Some(d) = summary.min_distance {
-            let ratio = d / (2.0 * radius);
+        if let Some(ratio) = summary.min_clearance_ratio {
             self.min_clearance_ratio =
                 Some(self.min_clearance_ratio.map_or(ratio, |r| r.min(ratio)));
         }
+    }
+}
+
+impl SolverTotals {
+    /// Adds one stage's counters; `timed`: a time step (a static solve has no sub-steps
+    /// or step lengths to count).
+    pub(crate) fn add(&mut self, report: &StepReport, timed: bool) {
+        let s = &report.solver;
+        self.newton_iterations += s.newton_iterations;
+        self.symbolic_analyses += s.symbolic_analyses;
+        self.line_search_cuts += s.line_search_cuts;
+        self.continuation_steps += s.continuation_steps;
+        self.multiplier_updates += s.multiplier_updates;
+        self.knots_inserted += report.adapt.inserted;
+        self.knots_removed += report.adapt.removed;
+        self.redone_steps += report.adapt.redone_steps;
+        if !timed {
+            return;
+        }
+        self.unconverged_steps += usize::from(!s.converged);
+        self.substeps += report.substeps.substeps;
+        self.rejected_steps += report.substeps.rejected;
+        let h = report.substeps.smallest_dt;
+        self.smallest_dt = Some(self.smallest_dt.map_or(h, |s| s.min(h)));
+    }
+}
+
+/// Totals of several runs (an ensemble's members).
+impl AddAssign for SolverTotals {
+    fn add_assign(&mut self, o: SolverTotals) {
+        self.newton_iterations += o.newton_iterations;
+        self.symbolic_analyses += o.symbolic_analyses;
+        self.line_search_cuts += o.line_search_cuts;
+        self.unconverged_steps += o.unconverged_steps;
+        self.substeps += o.substeps;
+        self.rejected_steps += o.rejected_steps;
+        self.smallest_dt = match (self.smallest_dt, o.smallest_dt) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        self.continuation_steps += o.continuation_steps;
+        self.multiplier_updates += o.multiplier_updates;
+        self.knots_inserted += o.knots_inserted;
+        self.knots_removed += o.knots_removed;
+        self.redone_steps += o.redone_steps;
     }
 }
 
@@ -124,98 +173,12 @@ pub struct RunResult {
     /// Tightness of the knot over time (scenes with `[rod.overhand]` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub knot: Option<KnotTrack>,
+    /// Wall time of each stage of the steps (drivers, setup, integrate, adapt, record),
+    /// summed over the run, s (member 0's for an ensemble).
+    pub stage_seconds: StageTimes,
     /// The error estimate (tolerance-driven `[adaptivity]`, or `output.error_estimate`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adaptivity: Option<EstimateOutput>,
-}
-
-/// What a run accumulated besides the final state.
-pub(crate) struct Tally {
-    pub(crate) time: Real,
-    pub(crate) steps: usize,
-    pub(crate) wall: Real,
-    pub(crate) solver: SolverTotals,
-    pub(crate) probes: Vec<Probe>,
-    pub(crate) pin_forces: Vec<Vector3<Real>>,
-    pub(crate) history: Vec<[Real; 2]>,
-    pub(crate) step_seconds: Vec<Real>,
-    pub(crate) contact: Option<ContactStats>,
-    pub(crate) knot: Option<KnotTrack>,
-    pub(crate) estimates: Option<EstimateOutput>,
-}
-
-impl Tally {
-    pub(crate) fn new(system: &RodSystem, probes: Vec<Probe>) -> Self {
-        Self {
-            time: 0.0,
-            steps: 0,
-            wall: 0.0,
-            solver: SolverTotals::default(),
-            probes,
-            pin_forces: Vec::new(),
-            history: vec![[0.0, system.rod.len() as Real]],
-            step_seconds: Vec::new(),
-            contact: None,
-            knot: None,
-            estimates: None,
-        }
-    }
-
-    /// Folds in the contacts of `system` now (no-op without contact).
-    pub(crate) fn contact(&mut self, system: &RodSystem) -> Result<(), Error> {
-        if let Some(c) = &system.contact {
-            let summary = c.summary(&system.rod)?;
-            self.contact_summary(&summary, c.params().radius);
-        }
-        Ok(())
-    }
-
-    fn contact_summary(&mut self, summary: &ContactSummary, radius: Real) {
-        self.contact.get_or_insert_default().add(summary, radius);
-    }
-
-    /// Adds one step's solver counters.
-    pub(crate) fn add(&mut self, report: &StepReport) {
-        let totals = &mut self.solver;
-        totals.newton_iterations += report.solver.newton_iterations;
-        totals.symbolic_analyses += report.solver.symbolic_analyses;
-        totals.line_search_cuts += report.solver.line_search_cuts;
-        totals.unconverged_steps += usize::from(!report.solver.converged);
-        totals.substeps += report.substeps.substeps;
-        totals.rejected_steps += report.substeps.rejected;
-        let h = report.substeps.smallest_dt;
-        totals.smallest_dt = Some(totals.smallest_dt.map_or(h, |s| s.min(h)));
-    }
-
-    /// Adds one step's counters and contact summary (`radius` of the rod, m).
-    pub(crate) fn add_step(&mut self, report: &StepReport, radius: Real) {
-        self.add(report);
-        if let Some(summary) = &report.contact {
-            self.contact_summary(summary, radius);
-        }
-    }
-
-    /// Appends the probed material points of `system` at time `t`.
-    pub(crate) fn probe(
-        &mut self,
-        scene: &Scene,
-        system: &RodSystem,
-        t: Real,
-    ) -> Result<(), Error> {
-        for probe in &mut self.probes {
-            probe.t.push(t);
-            let p = system.rod.point(scene.material_coordinate(probe.s))?;
-            probe.positions.push(p.into());
-        }
-        Ok(())
-    }
-
-    /// Records the control-point count at time `t` if it changed.
-    pub(crate) fn count(&mut self, t: Real, n: usize) {
-        if self.history.last().is_some_and(|h| h[1] != n as Real) {
-            self.history.push([t, n as Real]);
-        }
-    }
 }
 
 /// Runs `scene` to its end.
@@ -228,11 +191,7 @@ pub fn run_observed(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
 ) -> Result<RunResult, Error> {
-    match (scene.solver.method, &scene.ensemble) {
-        (Method::Static, _) => run_static(scene, observers),
-        (_, Some(_)) => crate::run_ensemble::run_ensemble(scene, observers),
-        _ => run_dynamic(scene, observers),
-    }
+    crate::run_loop::run_scene(scene, observers)
 }
 
 pub(crate) fn frame<'a>(
@@ -262,137 +221,6 @@ pub(crate) fn notify_finish(
     Ok(result)
 }
 
-fn run_static(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunResult, Error> {
-    let mut system = scene.build_system()?;
-    let l = scene.rod.rest_length;
-    for cut in &scene.cuts {
-        system.rod.cut(cut.at * l)?;
-    }
-    // Grabs pull to their final targets.
-    system.time = scene.grabs.iter().map(|g| g.end_time).fold(0.0, Real::max);
-    let (t, RodSystem { rod, grabs, .. }) = (system.time, &mut system);
-    for g in grabs.iter_mut() {
-        g.update(t, rod)?;
-    }
-    let mut tally = Tally::new(&system, probes_at_start(scene, &system)?);
-    tally.contact(&system)?;
-    for o in observers.iter_mut() {
-        o.start(&frame(scene, &system, 0.0, 0))?;
-    }
-    let mut solver = StaticSolver::new(scene.static_params())?;
-    let start = Instant::now();
-    let (stats, multiplier_updates) = solve_with_multipliers(&mut solver, &mut system)?;
-    tally.wall = start.elapsed().as_secs_f64();
-    tally.solver = SolverTotals {
-        newton_iterations: stats.newton_iterations,
-        symbolic_analyses: stats.symbolic_analyses,
-        line_search_cuts: stats.line_search_cuts,
-        continuation_steps: solver.continuation_steps(),
-        multiplier_updates,
-        ..SolverTotals::default()
-    };
-    tally.pin_forces = solver.pin_forces().to_vec();
-    tally.contact(&system)?;
-    if scene.output.error_estimate {
-        let grabs = system.grabs.iter().map(|g| g.spring.at).collect::<Vec<_>>();
-        let mut estimation = ErrorEstimation::default();
-        let e = estimation.run(&system, &grabs, &[], 0.0)?;
-        let out = tally.estimates.get_or_insert_default();
-        out.record(0.0, e.control_points, e.max(), true);
-    }
-    let result = finish(scene, &system, tally)?;
-    notify_finish(observers, &frame(scene, &system, 0.0, 0), result)
-}
-
-/// Largest mean strain an inextensible rod's static equilibrium may keep.
-const INEXTENSIBLE_TOLERANCE: Real = 1e-12;
-
-/// Multiplier updates a static solve may take to reach it.
-const MAX_MULTIPLIER_UPDATES: usize = 40;
-
-/// The static solve, repeated with updated multipliers while a constraint (the
-/// inextensible rod) is violated by more than [`INEXTENSIBLE_TOLERANCE`]; the summed
-/// counters and the number of updates.
-fn solve_with_multipliers(
-    solver: &mut StaticSolver,
-    system: &mut RodSystem,
-) -> Result<(StepStats, usize), Error> {
-    let mut stats = solver.solve(system)?;
-    for updates in 0..MAX_MULTIPLIER_UPDATES {
-        let violation = system.update_multipliers(true);
-        if violation <= INEXTENSIBLE_TOLERANCE {
-            return Ok((stats, updates));
-        }
-        let more = solver.solve(system)?;
-        stats.add_counts(&more);
-    }
-    let violation = system.update_multipliers(true);
-    if violation <= INEXTENSIBLE_TOLERANCE {
-        return Ok((stats, MAX_MULTIPLIER_UPDATES));
-    }
-    Err(Error::Scene(format!(
-        "rod.stretch_stiffness = \"inextensible\": a mean strain of {violation:.3e} remains \
-         after {MAX_MULTIPLIER_UPDATES} multiplier updates (tolerance {INEXTENSIBLE_TOLERANCE:e})"
-    )))
-}
-
-fn run_dynamic(scene: &Scene, observers: &mut [&mut dyn Observer]) -> Result<RunResult, Error> {
-    let mut sim = scene.build()?;
-    let dt = scene.solver.dt.unwrap_or_default();
-    let mut tally = Tally::new(&sim.system, probes_at_start(scene, &sim.system)?);
-    let mut cuts = CutSchedule::new(scene);
-    tally.contact(&sim.system)?;
-    if scene.rod.overhand.is_some() {
-        let mut track = KnotTrack::default();
-        track.record(&sim.system, 0.0, true)?;
-        tally.knot = Some(track);
-    }
-    let radius = scene.rod.radius.unwrap_or_default();
-    for o in observers.iter_mut() {
-        o.start(&frame(scene, &sim.system, 0.0, 0))?;
-    }
-    let start = Instant::now();
-    for _ in 0..scene.step_count() {
-        let step_start = Instant::now();
-        let report = sim.step(dt)?;
-        tally.add_step(&report, radius);
-        if let (Some(error), Some(e)) = (report.error_estimate, sim.error_estimate()) {
-            let changed = report.adapt.inserted + report.adapt.removed > 0;
-            let out = tally.estimates.get_or_insert_default();
-            out.record(sim.time, e.control_points, error, changed);
-        }
-        if let Some(track) = &mut tally.knot {
-            track.record(&sim.system, sim.time, false)?;
-        }
-        cuts.apply(sim.time, dt, |s| sim.cut(s))?;
-        let wall = step_start.elapsed().as_secs_f64();
-        tally.step_seconds.push(wall);
-        tally.count(sim.time, sim.system.rod.len());
-        tally.probe(scene, &sim.system, sim.time)?;
-        let now = frame(scene, &sim.system, sim.time, sim.steps);
-        for o in observers.iter_mut() {
-            o.step(&now, &report, wall)?;
-        }
-    }
-    tally.wall = start.elapsed().as_secs_f64();
-    if let Some(e) = sim.estimate_now()? {
-        let (n, error) = (e.control_points, e.max());
-        let out = tally.estimates.get_or_insert_default();
-        out.record(sim.time, n, error, true);
-    }
-    if let Some(track) = &mut tally.knot {
-        track.record(&sim.system, sim.time, true)?;
-    }
-    (tally.time, tally.steps) = (sim.time, sim.steps);
-    tally.pin_forces = sim.integrator.pin_forces();
-    let result = finish(scene, &sim.system, tally)?;
-    notify_finish(
-        observers,
-        &frame(scene, &sim.system, sim.time, sim.steps),
-        result,
-    )
-}
-
 pub(crate) fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
     scene
         .output
@@ -409,11 +237,16 @@ pub(crate) fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<P
         .collect()
 }
 
+/// The result of a run of `scene` whose (lead) member ended as `sim` with `tally`, in
+/// `wall` seconds with stages of `step_seconds`.
 pub(crate) fn finish(
     scene: &Scene,
-    system: &RodSystem,
-    mut tally: Tally,
+    sim: &Simulation,
+    tally: Tally,
+    wall: Real,
+    step_seconds: &mut [Real],
 ) -> Result<RunResult, Error> {
+    let system = &sim.system;
     let rod = &system.rod;
     let m = scene.output.samples;
     let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
@@ -429,11 +262,12 @@ pub(crate) fn finish(
     let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
     energy.extend(system.energy_breakdown());
     let l = rod.material().rest_length;
+    let statics = sim.integrator.solves_equilibrium();
     Ok(RunResult {
-        time: tally.time,
-        steps: tally.steps,
+        time: sim.time,
+        steps: sim.steps,
         control_points: rod.len(),
-        wall_seconds: tally.wall,
+        wall_seconds: wall,
         samples: Samples {
             s,
             positions,
@@ -443,48 +277,21 @@ pub(crate) fn finish(
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
         solver: tally.solver,
-        pin_forces: tally.pin_forces.iter().map(|f| (*f).into()).collect(),
+        pin_forces: sim
+            .integrator
+            .pin_forces()
+            .iter()
+            .map(|f| (*f).into())
+            .collect(),
         pieces: rod.pieces(),
         control_points_history: tally.history,
-        median_step_seconds: median(&mut tally.step_seconds),
+        median_step_seconds: if statics { 0.0 } else { median(step_seconds) },
         ensemble: Vec::new(),
         contact: tally.contact,
         knot: tally.knot,
+        stage_seconds: tally.stages,
         adaptivity: tally.estimates,
     })
-}
-
-/// The scene's cuts in time order, applied once each.
-pub(crate) struct CutSchedule {
-    cuts: Vec<(Real, Real)>,
-    next: usize,
-}
-
-impl CutSchedule {
-    /// The cuts of `scene` (material coordinates in m), sorted by time.
-    pub(crate) fn new(scene: &Scene) -> Self {
-        let mut cuts: Vec<_> = scene
-            .cuts
-            .iter()
-            .map(|c| (c.time, scene.material_coordinate(c.at)))
-            .collect();
-        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { cuts, next: 0 }
-    }
-
-    /// Calls `cut` for every cut due by `time` (a step of `dt` just ended) not yet made.
-    pub(crate) fn apply(
-        &mut self,
-        time: Real,
-        dt: Real,
-        mut cut: impl FnMut(Real) -> Result<(), Error>,
-    ) -> Result<(), Error> {
-        while self.next < self.cuts.len() && self.cuts[self.next].0 <= time + 1e-9 * dt {
-            cut(self.cuts[self.next].1)?;
-            self.next += 1;
-        }
-        Ok(())
-    }
 }
 
 /// Median of `values` (0 if empty); reorders them.

@@ -11,6 +11,7 @@ pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
 pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
+use splinerod_core::Requirement;
 
 /// A whole scene file.
 #[derive(Debug, Clone, Deserialize)]
@@ -278,7 +279,13 @@ impl Scene {
             source,
         })?;
         Self::from_toml(&text).map_err(|e| match e {
-            Error::Scene(m) => Error::Scene(format!("{}: {m}", path.display())),
+            Error::Parse {
+                position, message, ..
+            } => Error::Parse {
+                file: Some(path.display().to_string()),
+                position,
+                message,
+            },
             other => other,
         })
     }
@@ -346,10 +353,6 @@ impl Scene {
         }
         if let Some(e) = &self.ensemble {
             e.validate()?;
-            if self.solver.method == Method::Static {
-                let reason = "an ensemble needs a time-stepping solver.method";
-                return Err(Error::field("ensemble.count", e.count, reason));
-            }
         }
         if let Some(radius) = self.rod.radius {
             positive("rod.radius", radius)?;
@@ -453,44 +456,43 @@ fn parse_error(text: &str, e: &toml::de::Error) -> Error {
             let before = text.get(..span.start).unwrap_or(text);
             let line = before.matches('\n').count() + 1;
             let column = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
-            Error::Scene(format!("line {line}, column {column}: {message}"))
+            Error::Parse {
+                file: None,
+                position: Some((line, column)),
+                message,
+            }
         }
-        None => Error::Scene(message),
+        None => Error::Parse {
+            file: None,
+            position: None,
+            message,
+        },
     }
+}
+
+/// Error naming `field` and `v` unless `v` satisfies `requirement`.
+pub(crate) fn require(field: &str, v: f64, requirement: Requirement) -> Result<(), Error> {
+    requirement
+        .check(v)
+        .map_err(|reason| Error::field(field, v, reason))
 }
 
 pub(crate) fn positive(field: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::field(field, v, "must be finite and positive"))
-    }
+    require(field, v, Requirement::Positive)
 }
 
 pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), Error> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::field(field, v, "must be finite and non-negative"))
-    }
+    require(field, v, Requirement::NonNegative)
 }
 
 pub(crate) fn fraction(field: &str, v: f64) -> Result<(), Error> {
-    if (0.0..=1.0).contains(&v) {
-        Ok(())
-    } else {
-        Err(Error::field(
-            field,
-            v,
-            "must be a fraction of the rest length in [0, 1]",
-        ))
-    }
+    require(field, v, Requirement::Fraction)
 }
 
 pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(Error::field(field, format!("{v:?}"), "must be finite"))
+    let finite = Requirement::Finite;
+    match v.iter().try_for_each(|&x| finite.check(x)) {
+        Ok(()) => Ok(()),
+        Err(reason) => Err(Error::field(field, format!("{v:?}"), reason)),
     }
 }

@@ -3,6 +3,8 @@
 //! displaced by a random amount, reproducibly from `seed` (member `i` draws from stream
 //! `i` of a ChaCha8 generator, so it gets the same values whatever the thread count).
 
+use crate::run_loop::Tally;
+use crate::runner::ContactStats;
 use crate::scene::{non_negative, positive};
 use crate::{Error, Scene, Simulation};
 use nalgebra::Vector3;
@@ -51,6 +53,12 @@ pub struct MemberSummary {
     pub energy: BTreeMap<String, Real>,
     /// Final control points.
     pub control_points: usize,
+    /// Its contact statistics over the run (absent without `[contact]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactStats>,
+    /// Its last error estimate, m (absent without an estimator).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimated_error: Option<Real>,
 }
 
 fn range(field: &str, r: Option<[f64; 2]>, zero_allowed: bool) -> Result<(), Error> {
@@ -131,8 +139,13 @@ fn held_control_points(sim: &Simulation) -> Result<Vec<bool>, Error> {
     Ok(held)
 }
 
-/// The summary of a finished member.
-pub fn summarize(index: usize, scene: &Scene, sim: &Simulation) -> Result<MemberSummary, Error> {
+/// The summary of a finished member (its scene, simulation and what it accumulated).
+pub(crate) fn summarize(
+    index: usize,
+    scene: &Scene,
+    sim: &Simulation,
+    tally: &Tally,
+) -> Result<MemberSummary, Error> {
     let rod = &sim.system.rod;
     let l = rod.material().rest_length;
     let (a, b, m) = (rod.point(0.0)?, rod.point(l)?, rod.point(0.5 * l)?);
@@ -146,5 +159,7 @@ pub fn summarize(index: usize, scene: &Scene, sim: &Simulation) -> Result<Member
         sag: 0.5 * (a.y + b.y) - m.y,
         energy,
         control_points: rod.len(),
+        contact: tally.contact,
+        estimated_error: tally.estimates.as_ref().map(|e| e.estimated_error),
     })
 }

@@ -55,10 +55,10 @@ impl Scene {
         let r = &mut self.rod;
         let Some(shape) = r.overhand else {
             let Some(length) = r.given_rest_length else {
-                return Err(Error::Scene(
-                    "missing field `rod.rest_length` (required unless rod.overhand gives the shape)"
-                        .into(),
-                ));
+                return Err(Error::MissingField {
+                    field: "rod.rest_length".into(),
+                    reason: "required unless rod.overhand gives the shape".into(),
+                });
             };
             r.rest_length = length;
             return Ok(());

@@ -1,18 +1,25 @@
 //! [`Simulation`]: a [`RodSystem`] advanced by a boxed [`Integrator`], with optional
 //! adaptive resolution.
 //!
-//! One step (paper §4.1): move the grabs' targets to the end of the step, integrate
-//! (forces, Jacobians, one sparse solve per Newton iteration; contact is detected at
-//! every Newton iterate, as part of the forces), then adapt — insert and remove knots
-//! through the exact maps, telling every energy about each map, with the grabs and the
-//! contact points as interactions — and record what happened. Cutting goes through [`Simulation::cut`] for the same reason.
+//! One step (paper §4.1): move the grabs' targets to the end of the step, start every
+//! energy's step ([`splinerod_energies::Energy::begin_step`]), integrate (forces,
+//! Jacobians, one sparse solve per Newton iteration), then adapt — insert and remove
+//! knots through the exact maps, with the grabs and every energy's interaction points
+//! as interactions — and report what happened, stage by stage ([`StepReport`]). Every
+//! knot change goes through [`RodSystem::change_knots`], so the energies hear of it.
+//!
+//! An equilibrium solver ([`Integrator::solves_equilibrium`], the static solver) runs
+//! through the same stages: [`Simulation::step`] then gives a quasi-static sequence
+//! (the equilibrium under the loads at the end of each step), and
+//! [`Simulation::settle`] the equilibrium at the current time, re-solved after every
+//! adapt stage that changed the knots.
 
 use crate::estimate::ErrorEstimation;
+use crate::step_report::{StageTimes, StepReport};
 use crate::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepState};
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
-use splinerod_core::{KnotMap, Real, Rod};
-use splinerod_energies::{ContactSummary, Energy};
+use splinerod_core::{Real, Rod};
 use splinerod_integrators::{Integrator, StepStats};
 use std::time::Instant;
 
@@ -20,27 +27,8 @@ use std::time::Instant;
 /// rejected.
 const MAX_REDONE_STEPS: usize = 3;
 
-/// What one step did and how long it took.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct StepReport {
-    /// Solver counters of the integration stage.
-    pub solver: StepStats,
-    /// Knots inserted and removed by the adapt stage.
-    pub adapt: AdaptReport,
-    /// Control points after the step.
-    pub control_points: usize,
-    /// Wall time of the integration stage, s (recomputed steps included).
-    pub integrate_seconds: Real,
-    /// Wall time of the adapt stage, s: error estimate, marks and knot maps (of rejected
-    /// steps too).
-    pub adapt_seconds: Real,
-    /// Sub-steps taken, rejected and the shortest one (see [`crate::substep`]).
-    pub substeps: SubstepCounts,
-    /// Contacts at the end of the step (`None` without contact).
-    pub contact: Option<ContactSummary>,
-    /// The error estimate made at this step, m (`None` when none was due).
-    pub error_estimate: Option<Real>,
-}
+/// Most solve-and-adapt rounds of [`Simulation::settle`] with adaptivity.
+pub const MAX_SETTLE_ROUNDS: usize = 12;
 
 /// A rod system, the integrator that advances it and, optionally, the adapt step.
 pub struct Simulation {
@@ -60,6 +48,8 @@ pub struct Simulation {
     /// The error estimator: run after every step when a criterion reads it or when set
     /// (`Some`) on request; see [`Simulation::estimate_errors`].
     pub estimation: Option<ErrorEstimation>,
+    /// Stage times of the step under way.
+    pub(crate) clock: StageTimes,
     /// Length of the last step, s (the inertial load of the error estimate).
     last_dt: Real,
     saved_time: Real,
@@ -80,6 +70,7 @@ impl Simulation {
             control: StepControl::default(),
             substep: SubstepState::default(),
             estimation: None,
+            clock: StageTimes::default(),
             last_dt: 0.0,
             saved_time: 0.0,
             saved_substep: SubstepMemory::default(),
@@ -117,9 +108,43 @@ impl Simulation {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::field("dt", dt, "must be finite and positive"));
         }
-        let start = Instant::now();
+        self.system.check_knots_heard()?;
+        self.advance(dt)
+    }
+
+    /// Solves for the equilibrium at the current time (the integrator must be an
+    /// equilibrium solver, [`Integrator::solves_equilibrium`]), then adapts; while the
+    /// adapt stage changes the knots the equilibrium is solved again, at most
+    /// [`MAX_SETTLE_ROUNDS`] times. Time and the step count do not advance. The report
+    /// sums the rounds.
+    pub fn settle(&mut self) -> Result<StepReport, Error> {
+        if !self.integrator.solves_equilibrium() {
+            let name = self.integrator.name().to_string();
+            return Err(Error::NotAnEquilibriumSolver(name));
+        }
+        self.system.check_knots_heard()?;
+        let mut total = StepReport::default();
+        for _ in 0..MAX_SETTLE_ROUNDS {
+            let report = self.advance(0.0)?;
+            let changed = report.adapt.inserted + report.adapt.removed > 0;
+            total.solver += report.solver;
+            total.adapt += report.adapt;
+            total.stages += report.stages;
+            total.substeps = report.substeps;
+            (total.control_points, total.energies) = (report.control_points, report.energies);
+            total.error_estimate = report.error_estimate.or(total.error_estimate);
+            if !changed {
+                break;
+            }
+        }
+        Ok(total)
+    }
+
+    /// One step of `dt` (0: an equilibrium at the current time) through every stage.
+    fn advance(&mut self, dt: Real) -> Result<StepReport, Error> {
+        self.clock = StageTimes::default();
         let mut redone = 0;
-        let mut adapt_seconds = 0.0;
+        let start = Instant::now();
         let (solver, substeps, fresh) = loop {
             let (solver, substeps) = self.integrate_or_restore(dt)?;
             self.last_dt = dt;
@@ -132,7 +157,7 @@ impl Simulation {
             } else {
                 0
             };
-            adapt_seconds += stage.elapsed().as_secs_f64();
+            self.clock.adapt += stage.elapsed().as_secs_f64();
             if inserted > 0 {
                 redone += 1;
                 continue;
@@ -144,45 +169,47 @@ impl Simulation {
             }
             break (solver, substeps, fresh);
         };
-        let integrate_seconds = start.elapsed().as_secs_f64() - adapt_seconds;
+        let c = &mut self.clock;
+        c.integrate = start.elapsed().as_secs_f64() - c.adapt - c.drivers - c.setup;
         self.time += dt;
         self.system.time = self.time;
-        self.steps += 1;
+        self.steps += usize::from(dt > 0.0);
         // A multiplier update moves the constrained energy's minimum: a dissipative scheme
         // absorbs the jump, an energy-conserving one (the midpoint rule) would keep the
-        // axial ringing it starts, so there the penalty alone holds the constraint.
-        if !self.integrator.conserves_energy() {
+        // axial ringing it starts, so there the penalty alone holds the constraint. An
+        // equilibrium solver updates them itself until the constraint holds.
+        let integrator = &self.integrator;
+        if !integrator.conserves_energy() && !integrator.solves_equilibrium() {
             self.system.update_multipliers(false);
         }
         let stage = Instant::now();
         let mut adapt = self.apply_adapter(fresh)?;
-        adapt_seconds += stage.elapsed().as_secs_f64();
+        self.clock.adapt += stage.elapsed().as_secs_f64();
         adapt.redone_steps = redone;
         let error_estimate = fresh
             .then(|| self.error_estimate().map(|e| e.max()))
             .flatten();
-        let contact = self.system.contact.as_ref();
-        let contact = contact.map(|c| c.summary(&self.system.rod)).transpose()?;
         Ok(StepReport {
             solver,
             adapt,
             control_points: self.system.rod.len(),
-            integrate_seconds,
-            adapt_seconds,
+            stages: self.clock,
             substeps,
-            contact,
+            energies: self.system.summary()?,
             error_estimate,
         })
     }
 
     /// Runs the error estimate (if on) and the adapt step (if any) now.
     pub fn adapt(&mut self) -> Result<AdaptReport, Error> {
+        self.system.check_knots_heard()?;
         let fresh = self.estimate_now()?.is_some();
         self.apply_adapter(fresh)
     }
 
     /// Runs the error estimate now (if on), whatever the schedule, and returns it.
     pub fn estimate_now(&mut self) -> Result<Option<&ErrorEstimate>, Error> {
+        self.system.check_knots_heard()?;
         self.gather_interactions()?;
         match &mut self.estimation {
             Some(e) => Ok(Some(e.run(
@@ -228,22 +255,18 @@ impl Simulation {
         let (Some(adapter), Some(e)) = (self.adapter.as_mut(), &self.estimation) else {
             return Ok(0);
         };
-        let RodSystem { rod, energies, .. } = &mut self.system;
-        let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
-        Ok(adapter.refine(rod, &self.interactions, e.latest(), &mut follow)?)
+        let (interactions, estimate) = (&self.interactions, e.latest());
+        let refine = |rod: &mut Rod, heard: &mut dyn FnMut(&Rod, &splinerod_core::KnotMap)| {
+            adapter.refine(rod, interactions, estimate, heard)
+        };
+        Ok(self.system.change_knots(refine)?)
     }
 
-    /// The material coordinates where something acts on the rod now: active grabs and
-    /// contacts.
+    /// The material coordinates where something acts on the rod now
+    /// ([`RodSystem::interaction_points`]).
     fn gather_interactions(&mut self) -> Result<(), Error> {
         self.interactions.clear();
-        let t = self.system.time;
-        let grabs = self.system.grabs.iter().filter(|g| g.active(t));
-        self.interactions.extend(grabs.map(|g| g.spring.at));
-        if let Some(contact) = &self.system.contact {
-            contact.interaction_points(&self.system.rod, &mut self.interactions)?;
-        }
-        Ok(())
+        Ok(self.system.interaction_points(&mut self.interactions)?)
     }
 
     /// Runs the estimator on the state just integrated if it is on and an estimate is
@@ -287,22 +310,18 @@ impl Simulation {
         let Some(adapter) = self.adapter.as_mut() else {
             return Ok(AdaptReport::default());
         };
-        let RodSystem { rod, energies, .. } = &mut self.system;
-        let mut follow = |rod: &Rod, map: &KnotMap| notify(energies, rod, map);
-        Ok(adapter.adapt(rod, &self.interactions, estimate, &mut follow)?)
+        let interactions = &self.interactions;
+        let adapt = |rod: &mut Rod, heard: &mut dyn FnMut(&Rod, &splinerod_core::KnotMap)| {
+            adapter.adapt(rod, interactions, estimate, heard)
+        };
+        Ok(self.system.change_knots(adapt)?)
     }
 
-    /// Cuts the rod at material coordinate `s` (m; see [`Rod::cut`]).
+    /// Cuts the rod at material coordinate `s` (m; see [`RodSystem::cut`]).
     pub fn cut(&mut self, s: Real) -> Result<(), Error> {
-        let RodSystem { rod, energies, .. } = &mut self.system;
-        rod.cut_with(s, &mut |rod, map| notify(energies, rod, map))?;
+        self.system.check_knots_heard()?;
+        self.system.cut(s)?;
         Ok(())
-    }
-}
-
-fn notify(energies: &mut [Box<dyn Energy>], rod: &Rod, map: &KnotMap) {
-    for e in energies.iter_mut() {
-        e.on_knot_change(rod, map);
     }
 }
 

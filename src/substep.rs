@@ -36,6 +36,7 @@ use crate::{Error, Simulation};
 use nalgebra::Vector3;
 use splinerod_core::Real;
 use splinerod_integrators::{IntegratorError, StepStats};
+use std::time::Instant;
 
 /// After a rejection, sub-steps in a row that must succeed before the length may grow
 /// back to the rejected one.
@@ -119,6 +120,16 @@ impl Simulation {
     /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
     /// may hold an intermediate state: the caller restores it.
     pub(crate) fn integrate(&mut self, dt: Real) -> Result<(StepStats, SubstepCounts), Error> {
+        if self.integrator.solves_equilibrium() {
+            // One solve for the loads at the end of the step: no time error to control.
+            let (stats, _) = self.try_substep(self.time + dt, dt)?;
+            let counts = SubstepCounts {
+                substeps: 1,
+                rejected: 0,
+                smallest_dt: dt,
+            };
+            return Ok((stats, counts));
+        }
         let min_dt = self.control.min_dt.unwrap_or(dt * DEFAULT_MIN_DT_FRACTION);
         let mut h = self.substep.next.unwrap_or(dt).min(dt);
         let mut total = StepStats {
@@ -179,7 +190,8 @@ impl Simulation {
     }
 
     /// One integrator step of length `h` ending at `end`: grabs move to their targets at
-    /// `end`, contact starts its step, the integrator solves. Returns its counters and the
+    /// `end`, the energies start their step (not for an equilibrium solver: no time passes),
+    /// the integrator solves. Returns its counters and the
     /// step's error relative to what is allowed (≤ 1: accept; see the module docs).
     fn try_substep(&mut self, end: Real, h: Real) -> Result<(StepStats, Real), Error> {
         let tolerance = self.control.time_tolerance;
@@ -194,6 +206,7 @@ impl Simulation {
             self.substep.saved_q.clone_from(&rod.positions);
             self.substep.saved_v.clone_from(&rod.velocities);
         }
+        let drivers = Instant::now();
         self.system.time = end;
         self.substep.targets.clear();
         let rod = &self.system.rod;
@@ -201,15 +214,18 @@ impl Simulation {
             self.substep.targets.push(g.spring.target);
             g.update(end, rod)?;
         }
+        self.clock.drivers += drivers.elapsed().as_secs_f64();
         // Work of the grabs' moving targets on the start state (first half of the rule).
         let work_start = if guard {
             self.total_energy().0 - before.0
         } else {
             0.0
         };
-        if let Some(c) = &self.system.contact {
-            c.begin_step(&self.system.rod, h)?;
+        let setup = Instant::now();
+        if !self.integrator.solves_equilibrium() {
+            self.system.begin_step(h)?;
         }
+        self.clock.setup += setup.elapsed().as_secs_f64();
         let stats = self.integrator.step(&mut self.system, h)?;
         let mut ratio: Real = 0.0;
         if let Some(tau) = tolerance {

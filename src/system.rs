@@ -1,11 +1,21 @@
 //! [`RodSystem`]: a rod, its pins, its energies and its grabs; the facade's
 //! implementation of the integrators' [`System`] view (the sum of all energies and of
-//! the active grabs' springs and contact).
+//! the active grabs' springs).
+//!
+//! **One path for knot changes.** Energies may cache data that follow the rod's basis
+//! (a rest metric at the quadrature points, multipliers per tension function), so every
+//! insertion, removal or cut must reach them with its exact [`KnotMap`]. All of them go
+//! through [`RodSystem::change_knots`] (or its shorthands [`RodSystem::insert_knot`],
+//! [`RodSystem::remove_knot`], [`RodSystem::cut`]), which notifies every energy of
+//! every map and records the rod's topology epoch. A change made behind its back — a
+//! bare `rod.cut(..)`, or another rod put in its place — leaves a different epoch, and
+//! the next step, solve or estimate refuses to run on it
+//! ([`crate::Error::KnotsChangedUnheard`]) instead of reading stale caches.
 
-use crate::Grab;
+use crate::{Error, Grab};
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
-use splinerod_energies::{Contact, Energy};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
+use splinerod_energies::{Energy, EnergySummary};
 use splinerod_integrators::System;
 
 /// A rod with pins and a list of energies. All fields are public state.
@@ -20,20 +30,20 @@ pub struct RodSystem {
     pub grabs: Vec<Grab>,
     /// Simulated time the grabs are evaluated at (the end of the step being solved).
     pub time: Real,
-    /// Contact (self, between cut pieces, floor), if the scene has it.
-    pub contact: Option<Contact>,
+    /// The rod's topology epoch when the energies last heard of its knots.
+    heard_epoch: u64,
 }
 
 impl RodSystem {
     /// A system without pins or energies.
     pub fn new(rod: Rod) -> Self {
         Self {
+            heard_epoch: rod.topology_epoch(),
             rod,
             pins: Vec::new(),
             energies: Vec::new(),
             grabs: Vec::new(),
             time: 0.0,
-            contact: None,
         }
     }
 
@@ -46,12 +56,6 @@ impl RodSystem {
     /// Adds a pin (builder style).
     pub fn with_pin(mut self, pin: Pin) -> Self {
         self.pins.push(pin);
-        self
-    }
-
-    /// Adds contact (builder style).
-    pub fn with_contact(mut self, contact: Contact) -> Self {
-        self.contact = Some(contact);
         self
     }
 
@@ -69,13 +73,94 @@ impl RodSystem {
             .map(|g| &g.spring as &dyn Energy)
     }
 
-    /// Every energy acting now: the energies, the active grabs, then contact.
-    fn acting(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
+    /// Every energy acting now: the energies, then the active grabs.
+    pub fn acting(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
         self.energies
             .iter()
             .map(|e| e.as_ref())
             .chain(self.active_grabs())
-            .chain(self.contact.iter().map(|c| c as &dyn Energy))
+    }
+
+    /// Changes the rod's knots through `change`, which receives the rod and a listener
+    /// to call with every [`KnotMap`] it applies (as [`Rod::cut_with`] and the adapter
+    /// do); every energy hears of every map. The one way knots change (module docs).
+    pub fn change_knots<R, E>(
+        &mut self,
+        change: impl FnOnce(&mut Rod, &mut dyn FnMut(&Rod, &KnotMap)) -> Result<R, E>,
+    ) -> Result<R, E> {
+        let Self { rod, energies, .. } = self;
+        let mut listener = |rod: &Rod, map: &KnotMap| {
+            for e in energies.iter_mut() {
+                e.on_knot_change(rod, map);
+            }
+        };
+        let result = change(rod, &mut listener);
+        self.heard_epoch = self.rod.topology_epoch();
+        result
+    }
+
+    /// Inserts a knot at material coordinate `s` (m), telling the energies.
+    pub fn insert_knot(&mut self, s: Real) -> Result<(), CoreError> {
+        self.change_knots(|rod, heard| {
+            let map = rod.insert_knot(s)?;
+            heard(rod, &map);
+            Ok(())
+        })
+    }
+
+    /// Removes knot `index` if the curve moves by at most `tolerance` (m; see
+    /// [`Rod::remove_knot`]), telling the energies.
+    pub fn remove_knot(&mut self, index: usize, tolerance: Real) -> Result<(), CoreError> {
+        self.change_knots(|rod, heard| {
+            let map = rod.remove_knot(index, tolerance)?;
+            heard(rod, &map);
+            Ok(())
+        })
+    }
+
+    /// Cuts the rod at material coordinate `s` (m; see [`Rod::cut`]), telling the
+    /// energies; returns the knots inserted.
+    pub fn cut(&mut self, s: Real) -> Result<usize, CoreError> {
+        self.change_knots(|rod, heard| rod.cut_with(s, heard))
+    }
+
+    /// An error if the rod's knots changed (or the rod was replaced) without going
+    /// through [`RodSystem::change_knots`]: the energies' caches may be stale.
+    pub fn check_knots_heard(&self) -> Result<(), Error> {
+        if self.rod.topology_epoch() == self.heard_epoch {
+            Ok(())
+        } else {
+            Err(Error::KnotsChangedUnheard)
+        }
+    }
+
+    /// Starts an integrator step of `dt` seconds: every energy's
+    /// [`Energy::begin_step`].
+    pub fn begin_step(&mut self, dt: Real) -> Result<(), CoreError> {
+        let rod = &self.rod;
+        self.energies
+            .iter_mut()
+            .try_for_each(|e| e.begin_step(rod, dt))
+    }
+
+    /// Appends the material coordinates (m) where something acts locally now: the
+    /// active grabs, then every energy's [`Energy::interaction_points`].
+    pub fn interaction_points(&self, out: &mut Vec<Real>) -> Result<(), CoreError> {
+        let t = self.time;
+        let grabs = self.grabs.iter().filter(|g| g.active(t));
+        out.extend(grabs.map(|g| g.spring.at));
+        self.energies
+            .iter()
+            .try_for_each(|e| e.interaction_points(&self.rod, out))
+    }
+
+    /// The merged [`Energy::summary`] of every acting energy.
+    pub fn summary(&self) -> Result<EnergySummary, CoreError> {
+        let mut total = EnergySummary::default();
+        for e in self.acting() {
+            total.merge(&e.summary(&self.rod)?);
+        }
+        Ok(total)
     }
 
     /// One multiplier update of every energy holding constraints (the inextensible
@@ -127,7 +212,6 @@ impl std::fmt::Debug for RodSystem {
             .field("pins", &self.pins)
             .field("energies", &names)
             .field("grabs", &self.grabs)
-            .field("contact", &self.contact.as_ref().map(|c| c.params()))
             .finish()
     }
 }
@@ -162,8 +246,9 @@ impl System for RodSystem {
             .fold(d, usize::max)
     }
     fn admissible(&self) -> bool {
-        self.contact
-            .as_ref()
-            .is_none_or(|c| c.admissible(&self.rod))
+        self.acting().all(|e| e.admissible(&self.rod))
+    }
+    fn update_multipliers(&mut self, stiffen: bool) -> Real {
+        RodSystem::update_multipliers(self, stiffen)
     }
 }

@@ -128,8 +128,9 @@ fn insertions_during_a_simulation_cause_no_energy_jump() {
             sim.system.rod.kinetic_energy(),
             sim.system.potential_energy(),
         );
-        let report = adapter
-            .adapt(&mut sim.system.rod, &[], None, &mut |_, _| {})
+        let report = sim
+            .system
+            .change_knots(|rod, heard| adapter.adapt(rod, &[], None, heard))
             .expect("adapt");
         inserted += report.inserted;
         let after = (

@@ -56,7 +56,7 @@ fn watch(scene: &Scene) -> Watch {
         let fastest = sim.system.rod.max_speed();
         // Points 2r·c apart at the step's start, each moving less than c·r, cannot meet.
         w.displacement = w.displacement.max(fastest * dt / (r * allowed));
-        let contact = report.contact.unwrap();
+        let contact = report.energies.contact.unwrap();
         allowed = 1.05;
         if let Some(d) = contact.min_distance {
             w.clearance = w.clearance.min(d / (2.0 * r));

@@ -120,9 +120,37 @@ fn bad_ensemble_values_name_the_field() {
         let e = Scene::from_toml(&text).expect_err(to).to_string();
         assert!(e.contains(field), "{to}: {e}");
     }
+}
+
+#[test]
+fn a_static_ensemble_solves_every_member_alone() {
     let statics = SCENE.replace("method = \"implicit-euler\"", "method = \"static\"");
-    assert!(Scene::from_toml(&statics)
-        .expect_err("static")
-        .to_string()
-        .contains("ensemble"));
+    let scene = Scene::from_toml(&statics).expect("static ensemble");
+    let result = run(&scene).expect("static ensemble runs");
+    assert_eq!(result.ensemble.len(), 24);
+    assert_eq!(result.steps, 0);
+    // Each member is its own rod's equilibrium: stiffer members sag less.
+    let spec = scene.ensemble.as_ref().expect("ensemble");
+    for i in [0, 7, 23] {
+        let (member_scene, _) = spec.member(&scene, i).expect("member");
+        let mut alone = member_scene.clone();
+        alone.ensemble = None;
+        let single = run(&alone).expect("member alone");
+        let m = &result.ensemble[i];
+        assert!(m.energy["kinetic"] == 0.0);
+        assert!(
+            // The member starts perturbed, the rod alone straight: the same equilibrium.
+            (m.sag - sag_of(&single)).abs() < 1e-9,
+            "member {i}: {} against {}",
+            m.sag,
+            sag_of(&single)
+        );
+    }
+}
+
+/// Chord height minus material midpoint height of a run's samples (odd count).
+fn sag_of(r: &splinerod::RunResult) -> f64 {
+    let p = &r.samples.positions;
+    let mid = p[p.len() / 2][1];
+    0.5 * (p[0][1] + p[p.len() - 1][1]) - mid
 }

@@ -290,7 +290,7 @@ impl Observer for Recorder {
     fn step(&mut self, frame: &Frame<'_>, _: &StepReport, _: Real) -> Result<(), Error> {
         self.times.push((frame.step, frame.time));
         match self.fail_after {
-            Some(n) if frame.step >= n => Err(Error::Scene("stopped by the test".into())),
+            Some(n) if frame.step >= n => Err(Error::Stopped("the test".into())),
             _ => Ok(()),
         }
     }

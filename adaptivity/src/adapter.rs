@@ -79,6 +79,14 @@ pub struct AdaptReport {
     pub redone_steps: usize,
 }
 
+impl std::ops::AddAssign for AdaptReport {
+    fn add_assign(&mut self, other: AdaptReport) {
+        self.inserted += other.inserted;
+        self.removed += other.removed;
+        self.redone_steps += other.redone_steps;
+    }
+}
+
 /// Criteria, limits and the memory (hysteresis) of the adapt step.
 pub struct Adapter {
     /// Limits.

@@ -1,6 +1,6 @@
 //! Errors of the adaptivity crate.
 
-use splinerod_core::{CoreError, Real};
+use splinerod_core::{CoreError, Real, Requirement};
 
 /// What can go wrong configuring or running adaptivity.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -21,26 +21,21 @@ pub enum AdaptError {
     Core(#[from] CoreError),
 }
 
+/// Error unless `value` is finite and positive.
 pub(crate) fn positive(name: &'static str, value: Real) -> Result<(), AdaptError> {
-    if value.is_finite() && value > 0.0 {
-        return Ok(());
-    }
-    let reason = "must be finite and positive";
-    Err(AdaptError::InvalidParameter {
-        name,
-        value,
-        reason,
-    })
+    require(name, value, Requirement::Positive)
 }
 
+/// Error unless `value` is in `[0, 1]`.
 pub(crate) fn in_unit(name: &'static str, value: Real) -> Result<(), AdaptError> {
-    if (0.0..=1.0).contains(&value) {
-        return Ok(());
-    }
-    let reason = "must be in [0, 1]";
-    Err(AdaptError::InvalidParameter {
-        name,
-        value,
-        reason,
-    })
+    require(name, value, Requirement::UnitInterval)
+}
+
+fn require(name: &'static str, value: Real, r: Requirement) -> Result<(), AdaptError> {
+    r.check(value)
+        .map_err(|reason| AdaptError::InvalidParameter {
+            name,
+            value,
+            reason,
+        })
 }

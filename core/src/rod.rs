@@ -37,31 +37,7 @@ impl Material {
     }
 }
 
-/// Error unless `value` is finite and positive.
-pub fn positive(name: &'static str, value: Real) -> Result<(), CoreError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(CoreError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and positive",
-        })
-    }
-}
-
-/// Error unless `value` is finite and non-negative.
-pub fn non_negative(name: &'static str, value: Real) -> Result<(), CoreError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(CoreError::InvalidParameter {
-            name,
-            value,
-            reason: "must be finite and non-negative",
-        })
-    }
-}
+pub use crate::check::{non_negative, positive};
 
 /// A rod: state (`positions`, `velocities`) in public fields, and the basis with its
 /// cached quadrature and mass matrix, which change only through knot operations.

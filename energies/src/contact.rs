@@ -41,7 +41,7 @@ pub mod detect;
 mod friction;
 mod penalty;
 
-use crate::Energy;
+use crate::{Energy, EnergySummary};
 use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
 use nalgebra::{Matrix3, Vector3};
@@ -173,6 +173,25 @@ pub struct ContactSummary {
     pub candidates: usize,
     /// Smallest centre-line distance among the contacts, m (`None` without contacts).
     pub min_distance: Option<Real>,
+    /// `min_distance` over the diameter `2r` (`None` without contacts): below 1 the
+    /// strands overlap.
+    pub min_clearance_ratio: Option<Real>,
+}
+
+impl ContactSummary {
+    /// The summary of two sets of contacts together.
+    pub fn merged(&self, other: &ContactSummary) -> ContactSummary {
+        let min = |a: Option<Real>, b: Option<Real>| match (a, b) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        ContactSummary {
+            pairs: self.pairs + other.pairs,
+            candidates: self.candidates + other.candidates,
+            min_distance: min(self.min_distance, other.min_distance),
+            min_clearance_ratio: min(self.min_clearance_ratio, other.min_clearance_ratio),
+        }
+    }
 }
 
 impl Contact {
@@ -224,6 +243,7 @@ impl Contact {
             pairs: d.closest.len(),
             candidates: d.candidate_count(),
             min_distance,
+            min_clearance_ratio: min_distance.map(|d| d / (2.0 * self.params.radius)),
         })
     }
 
@@ -331,6 +351,34 @@ fn pair_rows(d: &Detector, pair: &SamplePair, out: &mut [(usize, Real); 2 * MAX_
 impl Energy for Contact {
     fn name(&self) -> &str {
         "contact"
+    }
+
+    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
+        Contact::begin_step(self, rod, dt)
+    }
+
+    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
+        Contact::interaction_points(self, rod, out)
+    }
+
+    fn admissible(&self, rod: &Rod) -> bool {
+        Contact::admissible(self, rod)
+    }
+
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            contact: Some(Contact::summary(self, rod)?),
+        })
+    }
+
+    /// The same contact without friction (its frozen data belong to the coarse rod's
+    /// step), for estimators evaluating the energies on a finer copy.
+    fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
+        let mut params = self.params;
+        params.friction = 0.0;
+        Contact::new(params)
+            .ok()
+            .map(|c| Box::new(c) as Box<dyn Energy>)
     }
 
     fn energy(&self, rod: &Rod) -> Real {

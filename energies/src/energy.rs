@@ -1,7 +1,29 @@
 //! The [`Energy`] trait and its finite-difference Hessian default.
 
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BlockBanded, HessianKind, KnotMap, Real, Rod};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod};
+
+use crate::ContactSummary;
+
+/// What an energy reports about the rod's current state, for run statistics (see
+/// [`Energy::summary`]); every part is optional and summaries of several energies merge.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EnergySummary {
+    /// Contacts the energy sees (self-contact, a floor, obstacles).
+    pub contact: Option<ContactSummary>,
+}
+
+impl EnergySummary {
+    /// Folds `other` into this summary (contacts: counts add, closest distances min).
+    pub fn merge(&mut self, other: &EnergySummary) {
+        if let Some(b) = other.contact {
+            self.contact = Some(match self.contact {
+                Some(a) => a.merged(&b),
+                None => b,
+            });
+        }
+    }
+}
 
 /// A potential energy \\(E(q)\\) of a rod's control points.
 ///
@@ -11,6 +33,14 @@ use splinerod_core::{BlockBanded, HessianKind, KnotMap, Real, Rod};
 /// `degree` apart, i.e. any integral of the curve and its derivatives); real energies
 /// override it. [`on_knot_change`](Energy::on_knot_change) lets an energy with cached
 /// per-coefficient data update it locally; the default does nothing.
+///
+/// **Lifecycle.** Besides the knot changes, an energy with state of its own hears of
+/// each integrator step ([`begin_step`](Energy::begin_step)), can name the material
+/// points where it acts locally ([`interaction_points`](Energy::interaction_points),
+/// read by the adaptivity), forbid states a line search must not enter
+/// ([`admissible`](Energy::admissible)) and report statistics
+/// ([`summary`](Energy::summary)). All default to doing nothing; contact uses all of
+/// them, and any other energy with per-step state plugs in the same way.
 ///
 /// A minimal implementation, a spring holding the rod's first control point at the origin:
 /// ```
@@ -82,6 +112,33 @@ pub trait Energy: Send + Sync {
     fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
         let _ = fine;
         None
+    }
+
+    /// Called before each integrator step (sub-step) of `dt` seconds, at the state it
+    /// starts from: freeze per-step data here (contact freezes its friction anchors).
+    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
+        let _ = (rod, dt);
+        Ok(())
+    }
+
+    /// Appends the material coordinates (m) where this energy acts locally now (both
+    /// sides of every contact), for refinement criteria; the default appends none.
+    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
+        let _ = (rod, out);
+        Ok(())
+    }
+
+    /// Whether the rod's state is one Newton's line search may move to (a penalty is a
+    /// finite barrier; see `System::admissible`). Default: always.
+    fn admissible(&self, rod: &Rod) -> bool {
+        let _ = rod;
+        true
+    }
+
+    /// Statistics of the current state for reports; the default reports nothing.
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        let _ = rod;
+        Ok(EnergySummary::default())
     }
 }
 

@@ -43,7 +43,7 @@ mod stretching;
 pub use bending::{Bending, STRETCH_FLOOR};
 pub use clamp::Clamp;
 pub use contact::{Contact, ContactParams, ContactSummary};
-pub use energy::{finite_difference_hessian, Energy};
+pub use energy::{finite_difference_hessian, Energy, EnergySummary};
 pub use gravity::Gravity;
 pub use point_spring::PointSpring;
 pub use stretching::{Multipliers, StretchFormulation, Stretching};

@@ -1,6 +1,6 @@
 //! Errors of the integrators crate.
 
-use splinerod_core::{CoreError, Real};
+use splinerod_core::{CoreError, Real, Requirement};
 
 /// What can go wrong while stepping or solving. The system state is left as it was.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -47,6 +47,17 @@ pub enum IntegratorError {
         /// Final residual norm.
         residual: Real,
     },
+    /// Multiplier updates of a constrained equilibrium (the inextensible rod) did not
+    /// bring the constraint violation below the tolerance.
+    #[error("a constraint violation (mean strain) of {violation:.3e} remains after {updates} multiplier updates (tolerance {tolerance:e})")]
+    ConstraintNotMet {
+        /// Violation after the last update.
+        violation: Real,
+        /// Updates made.
+        updates: usize,
+        /// Violation allowed.
+        tolerance: Real,
+    },
     /// A solve was asked of the linear solver before a successful factorisation, or with
     /// a right-hand side of the wrong length.
     #[error("linear solver misuse: {0}")]
@@ -83,12 +94,11 @@ impl IntegratorError {
 
 /// Error unless `value` is finite and positive.
 pub(crate) fn positive(name: &'static str, value: Real) -> Result<(), IntegratorError> {
-    if value.is_finite() && value > 0.0 {
-        return Ok(());
-    }
-    Err(IntegratorError::InvalidParameter {
-        name,
-        value,
-        reason: "must be finite and positive",
-    })
+    Requirement::Positive
+        .check(value)
+        .map_err(|reason| IntegratorError::InvalidParameter {
+            name,
+            value,
+            reason,
+        })
 }

@@ -48,7 +48,7 @@ pub use implicit_euler::ImplicitEuler;
 pub use linear::LinearSolverKind;
 pub use midpoint::ImplicitMidpoint;
 pub use newton::NewtonParams;
-pub use statics::{StaticParams, StaticSolver};
+pub use statics::{StaticParams, StaticSolver, CONSTRAINT_TOLERANCE, MAX_MULTIPLIER_UPDATES};
 
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
@@ -81,6 +81,13 @@ pub trait System: Send + Sync {
     fn admissible(&self) -> bool {
         true
     }
+    /// One multiplier update of every constraint held by multipliers (the inextensible
+    /// rod), `stiffen`ing penalties that fall too slowly; the largest violation before
+    /// it. Default: no constraints, 0.
+    fn update_multipliers(&mut self, stiffen: bool) -> Real {
+        let _ = stiffen;
+        0.0
+    }
 }
 
 /// Counters of one step or solve, for statistics and regression snapshots.
@@ -96,16 +103,33 @@ pub struct StepStats {
     pub converged: bool,
     /// Norm of the last residual (constraint forces removed), in the problem's units.
     pub residual: Real,
+    /// Pseudo-transient continuation steps of an equilibrium solve whose Newton failed.
+    pub continuation_steps: usize,
+    /// Multiplier updates of an equilibrium solve with constraints.
+    pub multiplier_updates: usize,
 }
 
 impl StepStats {
-    /// Adds the counters of `other` (iterations, analyses, cuts) and takes its residual;
-    /// what `converged` means for the sum is the caller's choice.
+    /// Adds the counters of `other` (iterations, analyses, cuts, continuation steps,
+    /// multiplier updates) and takes its residual; what `converged` means for the sum is
+    /// the caller's choice.
     pub fn add_counts(&mut self, other: &StepStats) {
         self.newton_iterations += other.newton_iterations;
         self.symbolic_analyses += other.symbolic_analyses;
         self.line_search_cuts += other.line_search_cuts;
+        self.continuation_steps += other.continuation_steps;
+        self.multiplier_updates += other.multiplier_updates;
         self.residual = other.residual;
+    }
+}
+
+/// The counters of a sequence of steps: sums, the last residual, and converged only if
+/// every step was.
+impl std::ops::AddAssign for StepStats {
+    fn add_assign(&mut self, other: StepStats) {
+        let first = *self == StepStats::default();
+        self.add_counts(&other);
+        self.converged = other.converged && (first || self.converged);
     }
 }
 
@@ -123,6 +147,13 @@ pub trait Integrator: Send + Sync {
     /// length (for nonlinear elasticity such a scheme can blow up at long steps), and a
     /// sub-stepping controller may reject it. Default false.
     fn conserves_energy(&self) -> bool {
+        false
+    }
+    /// Whether this "integrator" solves for equilibrium instead of advancing in time
+    /// (the [`StaticSolver`]): a step then has no duration of its own — no inertia, no
+    /// sub-steps, no per-step energy hooks — and yields the equilibrium under the loads
+    /// at its end. Default false.
+    fn solves_equilibrium(&self) -> bool {
         false
     }
     /// Forces the pins exerted on the rod during the last step, N, one per pin (empty if

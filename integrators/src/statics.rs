@@ -36,7 +36,7 @@
 use crate::incremental::{Increment, Stepper};
 use crate::linear::LinearSolverKind;
 use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
-use crate::{IntegratorError, StepStats, System};
+use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, HessianKind, Pin, Real, Rod};
 
@@ -78,7 +78,17 @@ const MAX_SADDLE_ESCAPES: usize = 10;
 /// Newton iterations of the static solve tried after each continuation step.
 const STATIC_TRY_ITERATIONS: usize = 15;
 
-/// Finds equilibria of a [`System`] (velocities are set to zero).
+/// Largest constraint violation (mean strain of a tension function) an equilibrium
+/// with multipliers may keep ([`StaticSolver::solve_constrained`]).
+pub const CONSTRAINT_TOLERANCE: Real = 1e-12;
+
+/// Multiplier updates [`StaticSolver::solve_constrained`] may take.
+pub const MAX_MULTIPLIER_UPDATES: usize = 40;
+
+/// Finds equilibria of a [`System`] (velocities are set to zero). As an
+/// [`Integrator`] ([`Integrator::solves_equilibrium`]) each step is
+/// [`StaticSolver::solve_constrained`] under the loads at the step's end: a
+/// quasi-static sequence.
 #[derive(Debug, Default)]
 pub struct StaticSolver {
     /// Settings.
@@ -197,6 +207,38 @@ impl StaticSolver {
     /// Forces the pins exert on the rod at equilibrium, N.
     pub fn pin_forces(&self) -> &[Vector3<Real>] {
         self.workspace.multipliers()
+    }
+
+    /// [`StaticSolver::solve`], repeated with updated multipliers
+    /// ([`System::update_multipliers`]) while a constraint (the inextensible rod) is
+    /// violated by more than [`CONSTRAINT_TOLERANCE`], at most
+    /// [`MAX_MULTIPLIER_UPDATES`] times; the counters summed over the solves.
+    pub fn solve_constrained(
+        &mut self,
+        system: &mut dyn System,
+    ) -> Result<StepStats, IntegratorError> {
+        let mut stats = self.solve(system)?;
+        let mut continuation = self.continuation_steps;
+        for updates in 0..=MAX_MULTIPLIER_UPDATES {
+            let violation = system.update_multipliers(true);
+            if violation <= CONSTRAINT_TOLERANCE {
+                stats.multiplier_updates = updates;
+                stats.continuation_steps = continuation;
+                return Ok(stats);
+            }
+            if updates == MAX_MULTIPLIER_UPDATES {
+                return Err(IntegratorError::ConstraintNotMet {
+                    violation,
+                    updates,
+                    tolerance: CONSTRAINT_TOLERANCE,
+                });
+            }
+            let more = self.solve(system)?;
+            continuation += self.continuation_steps;
+            stats.add_counts(&more);
+            stats.converged = more.converged;
+        }
+        Ok(stats)
     }
 
     /// A static Newton solve of at most `iterations` from the rod's positions; adds its
@@ -397,5 +439,23 @@ impl NewtonProblem for StaticProblem {
         } else {
             HessianKind::Definite
         };
+    }
+}
+
+impl Integrator for StaticSolver {
+    fn name(&self) -> &str {
+        "static"
+    }
+
+    fn step(&mut self, system: &mut dyn System, _dt: Real) -> Result<StepStats, IntegratorError> {
+        self.solve_constrained(system)
+    }
+
+    fn solves_equilibrium(&self) -> bool {
+        true
+    }
+
+    fn pin_forces(&self) -> Vec<Vector3<Real>> {
+        StaticSolver::pin_forces(self).to_vec()
     }
 }

@@ -142,7 +142,7 @@ fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
         b.hard_cases_converged, b.hard_cases_total, b.newton_per_step_default
     );
     if let Some(path) = json {
-        let text = serde_json::to_string_pretty(&b).map_err(|e| Error::Scene(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&b)?;
         std::fs::write(&path, text).map_err(|source| Error::Io {
             path: path.display().to_string(),
             source,
@@ -154,7 +154,7 @@ fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
 
 #[cfg(not(feature = "parallel"))]
 fn bench(_quick: bool, _json: Option<PathBuf>) -> Result<(), Error> {
-    Err(Error::Scene("bench needs the `parallel` feature".into()))
+    Err(Error::FeatureMissing("parallel"))
 }
 
 /// The observers the flags ask for, all checked before anything runs.
@@ -193,8 +193,7 @@ fn run(args: RunArgs) -> Result<(), Error> {
     let result = splinerod::run_observed(&scene, &mut refs)?;
     print!("{}", result.summary());
     if let Some(path) = &args.json {
-        let text =
-            serde_json::to_string_pretty(&result).map_err(|e| Error::Scene(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&result)?;
         std::fs::write(path, text).map_err(|source| Error::Io {
             path: path.display().to_string(),
             source,

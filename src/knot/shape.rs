@@ -3,6 +3,7 @@
 
 use super::diagram::{is_trefoil_diagram, polyline_crossings};
 use super::relax::{relaxed_fit, sample_curve, Target};
+use crate::scene::positive;
 use crate::Error;
 use nalgebra::Vector3;
 use splinerod_core::{BSplineSpace, Material, Real, Rod, MAX_DEGREE};
@@ -132,15 +133,6 @@ pub fn overhand_knot(spec: &OverhandSpec) -> Result<OverhandKnot, Error> {
         rest_length,
         degree: spec.degree,
     })
-}
-
-/// Error naming `field` unless `value` is finite and positive.
-fn positive(field: &str, value: Real) -> Result<(), Error> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::field(field, value, "must be finite and positive"))
-    }
 }
 
 /// The trefoil `T(t)` in knot units, and `T'(t)`.

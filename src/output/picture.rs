@@ -331,8 +331,9 @@ impl Observer for Pictures {
     }
 
     fn finish(&mut self, frame: &Frame<'_>, _: &RunResult) -> Result<(), Error> {
-        // A static solve has step 0 at both ends, but a new (equilibrium) state.
-        if frame.step == 0 || self.written_step != Some(frame.step) {
+        // The last state, unless its step was drawn already (a static solve's one stage
+        // is step 0 and is drawn by `step`).
+        if self.written_step != Some(frame.step) {
             self.write_frame(frame)?;
         }
         match &mut self.gif {

@@ -1,10 +1,11 @@
 //! Per-step statistics as CSV (`--stats OUT.csv`): one row per step with the time,
-//! resolution, Newton counters and residual, every energy term and the step's wall time.
+//! resolution, Newton counters and residual, every energy term, the step's wall time and
+//! the wall time of each of its stages (`drivers_seconds` ... `record_seconds`).
 //! Written to `OUT.csv.partial` and renamed at the end, so a run that fails leaves no
 //! file claiming to be complete.
 
 use crate::observe::{Frame, Observer};
-use crate::{Error, RunResult, StepReport};
+use crate::{Error, RunResult, StageTimes, StepReport};
 use splinerod_core::Real;
 use std::fs::File;
 use std::io::BufWriter;
@@ -94,6 +95,8 @@ impl Observer for StatsWriter {
         .collect();
         header.extend(self.energies.iter().cloned());
         header.push("wall_seconds".into());
+        let stages = StageTimes::NAMES.iter().map(|n| format!("{n}_seconds"));
+        header.extend(stages);
         let path = self.partial.clone();
         self.writer()?
             .write_record(&header)
@@ -117,6 +120,7 @@ impl Observer for StatsWriter {
         ];
         row.extend(self.energies.iter().map(|n| energy(n).to_string()));
         row.push(wall.to_string());
+        row.extend(report.stages.values().iter().map(|t| t.to_string()));
         let path = self.partial.clone();
         self.writer()?
             .write_record(&row)

@@ -1,0 +1,273 @@
+//! The one run loop behind [`crate::run`]: single runs, ensembles and static solves.
+//!
+//! A run is a list of members — one simulation, or the `[ensemble]`'s — advanced
+//! together ([`Ensemble`], in parallel with the `parallel` feature) through the same
+//! stages: a static scene is one [`Simulation::settle`] (the equilibrium under the
+//! grabs' final targets, re-solved while adaptivity changes the knots), a dynamic one
+//! `step_count` calls of [`Simulation::step`]. After each stage every member records in
+//! its own [`Tally`] — solver counters, energy summaries (contacts), error estimates,
+//! knot tracking, due cuts, the control-point history, probes — and observers see
+//! member 0. Cuts due at the start (all of them for a static scene) are made first.
+
+use crate::estimate::EstimateOutput;
+use crate::knot_track::KnotTrack;
+use crate::observe::Observer;
+use crate::runner::{finish, frame, notify_finish, probes_at_start, ContactStats, Probe};
+use crate::runner::{RunResult, SolverTotals};
+use crate::scene::{Method, Scene};
+use crate::scene_ensemble::summarize;
+use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
+use splinerod_core::Real;
+use splinerod_energies::EnergySummary;
+use std::time::Instant;
+
+/// What a member accumulated besides its final state.
+pub(crate) struct Tally {
+    pub(crate) solver: SolverTotals,
+    pub(crate) probes: Vec<Probe>,
+    pub(crate) history: Vec<[Real; 2]>,
+    pub(crate) contact: Option<ContactStats>,
+    pub(crate) knot: Option<KnotTrack>,
+    pub(crate) estimates: Option<EstimateOutput>,
+    /// Wall time of each stage, summed over the run.
+    pub(crate) stages: StageTimes,
+    cuts: CutSchedule,
+}
+
+impl Tally {
+    /// The tally of a member of `scene` at its start (its energies' summary included).
+    fn new(scene: &Scene, system: &RodSystem) -> Result<Self, Error> {
+        let mut tally = Self {
+            solver: SolverTotals::default(),
+            probes: probes_at_start(scene, system)?,
+            history: vec![[0.0, system.rod.len() as Real]],
+            contact: None,
+            knot: None,
+            estimates: None,
+            stages: StageTimes::default(),
+            cuts: CutSchedule::new(scene),
+        };
+        tally.summary(&system.summary()?);
+        if scene.rod.overhand.is_some() {
+            let mut track = KnotTrack::default();
+            track.record(system, 0.0, true)?;
+            tally.knot = Some(track);
+        }
+        Ok(tally)
+    }
+
+    /// Folds in the energies' summary of one state.
+    fn summary(&mut self, summary: &EnergySummary) {
+        if let Some(c) = &summary.contact {
+            self.contact.get_or_insert_default().add(c);
+        }
+    }
+
+    /// Records one stage's report and the state after it; makes the cuts now due.
+    /// Returns the wall time it took.
+    fn record(
+        &mut self,
+        scene: &Scene,
+        sim: &mut Simulation,
+        report: &StepReport,
+        dt: Real,
+    ) -> Result<Real, Error> {
+        let start = Instant::now();
+        self.solver.add(report, dt > 0.0);
+        self.summary(&report.energies);
+        if let (Some(error), Some(e)) = (report.error_estimate, sim.error_estimate()) {
+            let changed = report.adapt.inserted + report.adapt.removed > 0;
+            let out = self.estimates.get_or_insert_default();
+            out.record(sim.time, e.control_points, error, changed);
+        }
+        if let Some(track) = &mut self.knot {
+            track.record(&sim.system, sim.time, false)?;
+        }
+        let time = sim.time;
+        self.cuts.apply(time, dt, |s| sim.cut(s))?;
+        self.count(sim.time, sim.system.rod.len());
+        self.probe(scene, &sim.system, sim.time)?;
+        Ok(start.elapsed().as_secs_f64())
+    }
+
+    /// The final estimate and knot record of a member at the end of its run.
+    fn close(&mut self, sim: &mut Simulation) -> Result<(), Error> {
+        if let Some(e) = sim.estimate_now()? {
+            let (n, error) = (e.control_points, e.max());
+            let out = self.estimates.get_or_insert_default();
+            out.record(sim.time, n, error, true);
+        }
+        if let Some(track) = &mut self.knot {
+            track.record(&sim.system, sim.time, true)?;
+        }
+        Ok(())
+    }
+
+    /// Appends the probed material points of `system` at time `t`.
+    fn probe(&mut self, scene: &Scene, system: &RodSystem, t: Real) -> Result<(), Error> {
+        for probe in &mut self.probes {
+            probe.t.push(t);
+            let p = system.rod.point(scene.material_coordinate(probe.s))?;
+            probe.positions.push(p.into());
+        }
+        Ok(())
+    }
+
+    /// Records the control-point count at time `t` if it changed.
+    fn count(&mut self, t: Real, n: usize) {
+        if self.history.last().is_some_and(|h| h[1] != n as Real) {
+            self.history.push([t, n as Real]);
+        }
+    }
+}
+
+/// The scene's cuts in time order, applied once each.
+struct CutSchedule {
+    cuts: Vec<(Real, Real)>,
+    next: usize,
+}
+
+impl CutSchedule {
+    /// The cuts of `scene` (material coordinates in m), sorted by time.
+    fn new(scene: &Scene) -> Self {
+        let mut cuts: Vec<_> = scene
+            .cuts
+            .iter()
+            .map(|c| (c.time, scene.material_coordinate(c.at)))
+            .collect();
+        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Self { cuts, next: 0 }
+    }
+
+    /// Calls `cut` for every cut due by `time` (a step of `dt` just ended) not yet made.
+    fn apply(
+        &mut self,
+        time: Real,
+        dt: Real,
+        mut cut: impl FnMut(Real) -> Result<(), Error>,
+    ) -> Result<(), Error> {
+        while self.next < self.cuts.len() && self.cuts[self.next].0 <= time + 1e-9 * dt {
+            cut(self.cuts[self.next].1)?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+}
+
+/// One member of a run.
+struct Member {
+    scene: Scene,
+    tally: Tally,
+}
+
+/// The members of `scene`: the ensemble's, or the scene itself.
+fn build_members(scene: &Scene) -> Result<Vec<(Scene, Simulation)>, Error> {
+    match &scene.ensemble {
+        Some(spec) => (0..spec.count).map(|i| spec.member(scene, i)).collect(),
+        None => Ok(vec![(scene.clone(), scene.build()?)]),
+    }
+}
+
+/// Prepares a member for its first stage: a static solve starts at the time the grabs
+/// reach their final targets, with every cut made; a dynamic one with the cuts due at
+/// time zero.
+fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Result<(), Error> {
+    if scene.solver.method == Method::Static {
+        let t = scene.grabs.iter().map(|g| g.end_time).fold(0.0, Real::max);
+        (sim.time, sim.system.time) = (t, t);
+        cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))
+    } else {
+        cuts.apply(0.0, 0.0, |s| sim.cut(s))
+    }
+}
+
+/// Runs `scene` to its end, showing every stage of member 0 to `observers`.
+pub(crate) fn run_scene(
+    scene: &Scene,
+    observers: &mut [&mut dyn Observer],
+) -> Result<RunResult, Error> {
+    let mut members = Vec::new();
+    let mut sims = Vec::new();
+    for (member_scene, mut sim) in build_members(scene)? {
+        let mut cuts = CutSchedule::new(&member_scene);
+        prepare(&member_scene, &mut sim, &mut cuts)?;
+        let mut tally = Tally::new(&member_scene, &sim.system)?;
+        tally.cuts = cuts;
+        members.push(Member {
+            scene: member_scene,
+            tally,
+        });
+        sims.push(sim);
+    }
+    let mut ensemble = Ensemble::new(sims);
+    let lead = &ensemble.members[0];
+    for o in observers.iter_mut() {
+        o.start(&frame(scene, &lead.system, lead.time, 0))?;
+    }
+    let statics = scene.solver.method == Method::Static;
+    let (stages, dt) = if statics {
+        (1, 0.0)
+    } else {
+        (scene.step_count(), scene.solver.dt.unwrap_or_default())
+    };
+    let mut step_seconds = Vec::with_capacity(stages);
+    let start = Instant::now();
+    for _ in 0..stages {
+        let stage_start = Instant::now();
+        if statics {
+            ensemble.settle()?;
+        } else {
+            ensemble.step(dt)?;
+        }
+        let Ensemble {
+            members: sims,
+            reports,
+        } = &mut ensemble;
+        for ((m, sim), report) in members
+            .iter_mut()
+            .zip(sims.iter_mut())
+            .zip(reports.iter_mut())
+        {
+            report.stages.record = m.tally.record(&m.scene, sim, report, dt)?;
+            m.tally.stages += report.stages;
+        }
+        let wall = stage_start.elapsed().as_secs_f64();
+        step_seconds.push(wall);
+        let lead = &ensemble.members[0];
+        let now = frame(scene, &lead.system, lead.time, lead.steps);
+        for o in observers.iter_mut() {
+            o.step(&now, &ensemble.reports[0], wall)?;
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    for (m, sim) in members.iter_mut().zip(ensemble.members.iter_mut()) {
+        m.tally.close(sim)?;
+    }
+    let summaries = if scene.ensemble.is_some() {
+        let all = members.iter().zip(&ensemble.members).enumerate();
+        all.map(|(i, (m, sim))| summarize(i, &m.scene, sim, &m.tally))
+            .collect::<Result<Vec<_>, _>>()?
+    } else {
+        Vec::new()
+    };
+    let solver = ensemble_totals(&members);
+    let lead = &ensemble.members[0];
+    let mut tally = members.swap_remove(0).tally;
+    tally.solver = solver;
+    let mut result = finish(scene, lead, tally, wall, &mut step_seconds)?;
+    result.ensemble = summaries;
+    notify_finish(
+        observers,
+        &frame(scene, &lead.system, lead.time, lead.steps),
+        result,
+    )
+}
+
+/// Solver counters summed over every member.
+fn ensemble_totals(members: &[Member]) -> SolverTotals {
+    let mut total = SolverTotals::default();
+    for m in members {
+        total += m.tally.solver;
+    }
+    total
+}
