@@ -52,7 +52,12 @@ impl Ensemble {
     ) -> Result<(), Error> {
         self.reports
             .resize(self.members.len(), StepReport::default());
-        match stage_all(&mut self.members, &mut self.reports, &stage) {
+        // One member (a single run): no thread pool round trip (tens of µs a step).
+        let failed = match (self.members.as_mut_slice(), self.reports.as_mut_slice()) {
+            ([sim], [report]) => stage_one(0, sim, report, &stage),
+            (members, reports) => stage_all(members, reports, &stage),
+        };
+        match failed {
             Some((index, e)) => Err(Error::Member {
                 index,
                 source: Box::new(e),
