@@ -61,6 +61,7 @@ pub mod scene;
 mod scene_adapt;
 mod scene_contact;
 mod scene_ensemble;
+mod scene_obstacles;
 mod scene_shape;
 mod scene_solver;
 mod simulation;

@@ -50,9 +50,14 @@ impl RunResult {
                 .min_clearance_ratio
                 .map_or("-".into(), |r| format!("{r:.4}"));
             out.push_str(&format!(
-                "contact: min clearance {ratio} of the diameter, at most {} pairs\n",
+                "contact: min clearance {ratio}, at most {} pairs",
                 c.max_pairs
             ));
+            if c.max_obstacle_contacts > 0 {
+                let n = c.max_obstacle_contacts;
+                out.push_str(&format!(", {n} samples on obstacles"));
+            }
+            out.push('\n');
         }
         if self.solver.unconverged_steps > 0 {
             out.push_str(&format!(

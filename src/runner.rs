@@ -70,17 +70,21 @@ pub struct SolverTotals {
 /// Contact over the run (scenes with `[contact]`).
 #[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
 pub struct ContactStats {
-    /// Smallest (centre-line distance between touching parts) / (2 · radius) seen at the
-    /// start or at the end of any step; `null` if nothing came within the penalty's reach.
+    /// Smallest clearance ratio seen at the start or at the end of any step: centre-line
+    /// distance between touching parts over `2r`, or from an obstacle's surface over
+    /// `r` (below 1: overlap); `null` if nothing came within the penalty's reach.
     pub min_clearance_ratio: Option<Real>,
     /// Most contacts at once.
     pub max_pairs: usize,
+    /// Most material samples touching an obstacle at once (0 without obstacles).
+    pub max_obstacle_contacts: usize,
 }
 
 impl ContactStats {
     /// Folds in one contact summary.
     pub(crate) fn add(&mut self, summary: &ContactSummary) {
         self.max_pairs = self.max_pairs.max(summary.pairs);
+        self.max_obstacle_contacts = self.max_obstacle_contacts.max(summary.obstacle_contacts);
         if let Some(ratio) = summary.min_clearance_ratio {
             self.min_clearance_ratio =
                 Some(self.min_clearance_ratio.map_or(ratio, |r| r.min(ratio)));

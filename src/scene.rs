@@ -8,6 +8,7 @@
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
+pub use crate::scene_obstacles::ObstacleSpec;
 pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
@@ -42,6 +43,9 @@ pub struct Scene {
     pub ensemble: Option<EnsembleSpec>,
     /// Self-contact, contact between cut pieces, and a floor.
     pub contact: Option<ContactSpec>,
+    /// Rigid obstacles (with `[contact]`'s penalty and friction).
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
 }
 
 /// `[rod]`.
@@ -369,6 +373,7 @@ impl Scene {
         if let Some(c) = &self.contact {
             c.validate(self.rod.radius)?;
         }
+        self.validate_obstacles()?;
         crate::scene_adapt::validate(
             self.adaptivity.as_ref(),
             &self.grabs,

@@ -82,6 +82,7 @@ impl Scene {
         params.exclusion = spec.exclusion.unwrap_or(params.exclusion);
         params.friction = spec.friction;
         params.slip_speed = spec.slip_speed.unwrap_or(params.slip_speed);
-        Ok(Some(Contact::new(params)?))
+        let obstacles = self.obstacles.iter().map(|o| o.obstacle());
+        Ok(Some(Contact::new(params)?.with_obstacles(obstacles)?))
     }
 }

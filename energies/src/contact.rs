@@ -28,8 +28,12 @@
 //! \\(\tfrac{1}{2r}\, \phi(g(s))\\): a length of rod equal to its diameter pressed into
 //! the floor resists like one self-contact.
 //!
+//! **Obstacles** (module [`obstacle`]): rigid planes, spheres and capsules, with the
+//! floor's penalty per unit length on the detection's material samples.
+//!
 //! **Friction** (coefficient `μ`, see the `friction` module): Coulomb friction as a
-//! lagged dissipative potential, frozen at [`Contact::begin_step`].
+//! lagged dissipative potential, frozen at [`Contact::begin_step`], on every contact:
+//! self, floor and obstacles.
 //!
 //! **What is not modelled:** contacts between segments less than `exclusion`
 //! apart along the rod (neighbours: a rod bent to radius `r` first touches itself at
@@ -38,13 +42,16 @@
 
 mod assemble;
 pub mod detect;
+mod floor;
 mod friction;
+pub mod obstacle;
 mod penalty;
 
 use crate::{Energy, EnergySummary};
 use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
+pub use obstacle::Obstacle;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::rod::{non_negative, positive};
@@ -151,6 +158,8 @@ pub struct Contact {
     penalty: Penalty,
     detector: Mutex<Detector>,
     friction: Mutex<Friction>,
+    /// Rigid obstacles (see [`obstacle`]).
+    obstacles: Vec<Obstacle>,
 }
 
 impl Clone for Contact {
@@ -158,6 +167,7 @@ impl Clone for Contact {
         Self {
             params: self.params,
             penalty: self.penalty,
+            obstacles: self.obstacles.clone(),
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
         }
@@ -173,9 +183,12 @@ pub struct ContactSummary {
     pub candidates: usize,
     /// Smallest centre-line distance among the contacts, m (`None` without contacts).
     pub min_distance: Option<Real>,
-    /// `min_distance` over the diameter `2r` (`None` without contacts): below 1 the
-    /// strands overlap.
+    /// The smallest clearance ratio (`None` without contacts): centre-line distance
+    /// over the diameter `2r` between strands, over the radius `r` from an obstacle;
+    /// below 1 the rod overlaps.
     pub min_clearance_ratio: Option<Real>,
+    /// Material samples within the penalty's reach of an obstacle.
+    pub obstacle_contacts: usize,
 }
 
 impl ContactSummary {
@@ -190,6 +203,7 @@ impl ContactSummary {
             candidates: self.candidates + other.candidates,
             min_distance: min(self.min_distance, other.min_distance),
             min_clearance_ratio: min(self.min_clearance_ratio, other.min_clearance_ratio),
+            obstacle_contacts: self.obstacle_contacts + other.obstacle_contacts,
         }
     }
 }
@@ -206,7 +220,25 @@ impl Contact {
             },
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
+            obstacles: Vec::new(),
         })
+    }
+
+    /// Adds rigid obstacles (builder style), each validated.
+    pub fn with_obstacles(
+        mut self,
+        obstacles: impl IntoIterator<Item = Obstacle>,
+    ) -> Result<Self, CoreError> {
+        for o in obstacles {
+            o.validate()?;
+            self.obstacles.push(o);
+        }
+        Ok(self)
+    }
+
+    /// The rigid obstacles.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles
     }
 
     /// The settings.
@@ -239,11 +271,20 @@ impl Contact {
         let mut d = self.detected(rod)?;
         d.closest(rod, self.params.reach())?;
         let min_distance = d.closest.iter().map(|c| c.distance).reduce(Real::min);
+        let (pairs, candidates) = (d.closest.len(), d.candidate_count());
+        drop(d);
+        let strands = min_distance.map(|d| d / (2.0 * self.params.radius));
+        let (obstacle_contacts, obstacles) = self.obstacle_summary(rod)?;
+        let min_clearance_ratio = match (strands, obstacles) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
         Ok(ContactSummary {
-            pairs: d.closest.len(),
-            candidates: d.candidate_count(),
+            pairs,
+            candidates,
             min_distance,
-            min_clearance_ratio: min_distance.map(|d| d / (2.0 * self.params.radius)),
+            min_clearance_ratio,
+            obstacle_contacts,
         })
     }
 
@@ -256,7 +297,13 @@ impl Contact {
             return false;
         };
         let floor = self.params.radius;
-        d.pairs.iter().all(|p| p.distance >= floor)
+        let apart = d.pairs.iter().all(|p| p.distance >= floor);
+        drop(d);
+        // No centre line inside an obstacle.
+        let mut outside = true;
+        let r = self.params.radius;
+        let seen = self.for_each_obstacle_point(rod, |p| outside &= p.gap + r > 0.0);
+        apart && outside && seen.is_ok()
     }
 
     /// Starts a time step of `dt` seconds at the rod's state: freezes every contact's
@@ -277,25 +324,19 @@ impl Contact {
             friction.push(&weights[..len], &c.normal, lambda);
         }
         drop(d);
-        let normal = self.params.floor.map_or(Vector3::zeros(), |f| f.0);
-        self.for_each_floor_point(rod, |g, w, first, value| {
-            let mut rows = [(0, 0.0); 2 * MAX_ORDER];
-            for (row, (k, &b)) in rows.iter_mut().zip(value.iter().enumerate()) {
-                *row = (first + k, b);
-            }
-            friction.push(&rows[..value.len()], &normal, -w * self.penalty.slope(g));
-        });
-        Ok(())
+        self.push_floor_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda));
+        self.push_obstacle_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda))
     }
 
     fn friction_state(&self) -> MutexGuard<'_, Friction> {
         self.friction.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Appends the material coordinates of both sides of every contact (for the
-    /// interaction refinement criterion).
+    /// Appends the material coordinates of both sides of every contact, and of the
+    /// closest point to every obstacle touched (for the interaction refinement criterion).
     pub fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
-        self.for_each_contact(rod, |c| out.extend([c.s, c.t]))
+        self.for_each_contact(rod, |c| out.extend([c.s, c.t]))?;
+        self.obstacle_interaction_points(rod, out)
     }
 
     /// Weight of a sample pair: \\(w_a w_b / (2r)^2\\).
@@ -306,24 +347,6 @@ impl Contact {
 
     fn gap(&self, pair: &SamplePair) -> Real {
         pair.distance - 2.0 * self.params.radius
-    }
-
-    /// Calls `f(point, weight, basis row)` at every quadrature point with the floor gap.
-    fn for_each_floor_point(&self, rod: &Rod, mut f: impl FnMut(Real, Real, usize, &[Real])) {
-        let Some((normal, height)) = self.params.floor else {
-            return;
-        };
-        let table = rod.quadrature();
-        for p in 0..table.len() {
-            let q = table.point(p);
-            let x: Vector3<Real> = (0..q.value.len())
-                .map(|k| rod.positions[q.first + k] * q.value[k])
-                .sum();
-            let gap = normal.dot(&x) - height - self.params.radius;
-            if gap < self.params.onset {
-                f(gap, q.weight / (2.0 * self.params.radius), q.first, q.value);
-            }
-        }
     }
 }
 
@@ -376,9 +399,8 @@ impl Energy for Contact {
     fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
         let mut params = self.params;
         params.friction = 0.0;
-        Contact::new(params)
-            .ok()
-            .map(|c| Box::new(c) as Box<dyn Energy>)
+        let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
+        copy.ok().map(|c| Box::new(c) as Box<dyn Energy>)
     }
 
     fn energy(&self, rod: &Rod) -> Real {
@@ -391,8 +413,9 @@ impl Energy for Contact {
             .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(c)))
             .sum();
         drop(d);
-        self.for_each_floor_point(rod, |g, w, _, _| e += w * self.penalty.value(g));
-        e + self.friction_state().energy(rod, self.params.friction)
+        e += self.floor_energy(rod);
+        let obstacles = self.obstacle_energy(rod).unwrap_or(Real::NAN);
+        e + obstacles + self.friction_state().energy(rod, self.params.friction)
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
@@ -411,13 +434,13 @@ impl Energy for Contact {
             }
         }
         drop(d);
-        let normal = self.params.floor.map_or(Vector3::zeros(), |f| f.0);
-        self.for_each_floor_point(rod, |g, w, first, value| {
-            let force = normal * (w * self.penalty.slope(g));
-            for (k, b) in value.iter().enumerate() {
-                gradient[first + k] += force * *b;
-            }
-        });
+        self.add_floor_gradient(rod, gradient);
+        if self.add_obstacle_gradient(rod, gradient).is_err() {
+            gradient
+                .iter_mut()
+                .for_each(|g| *g = Vector3::repeat(Real::NAN));
+            return;
+        }
         let mu = self.params.friction;
         self.friction_state().add_gradient(rod, mu, gradient);
     }
@@ -451,18 +474,11 @@ impl Energy for Contact {
         local.flush(hessian);
         d.group_hessian = local;
         drop(d);
-        let nn: Matrix3<Real> = self
-            .params
-            .floor
-            .map_or(Matrix3::zeros(), |f| f.0 * f.0.transpose());
-        self.for_each_floor_point(rod, |g, w, first, value| {
-            let c = w * self.penalty.curvature(g);
-            for (a, ba) in value.iter().enumerate() {
-                for (b, bb) in value.iter().enumerate().skip(a) {
-                    hessian.add_block(first + a, first + b, &(nn * (c * ba * bb)));
-                }
-            }
-        });
+        self.add_floor_hessian(rod, hessian);
+        if self.add_obstacle_hessian(rod, hessian).is_err() {
+            hessian.scale(Real::NAN);
+            return;
+        }
         let mu = self.params.friction;
         self.friction_state().add_hessian(rod, mu, hessian);
     }

@@ -42,7 +42,7 @@ mod stretching;
 
 pub use bending::{Bending, STRETCH_FLOOR};
 pub use clamp::Clamp;
-pub use contact::{Contact, ContactParams, ContactSummary};
+pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary};
 pub use gravity::Gravity;
 pub use point_spring::PointSpring;

@@ -1,0 +1,248 @@
+//! Rigid obstacles: planes, spheres and capsules (cylinders with rounded ends) the rod
+//! stays out of, with the same penalty and friction as the rod's own contacts.
+//!
+//! With \\(d(x)\\) the signed distance from a point to the obstacle's surface and
+//! \\(n(x) = \nabla d\\) the outward normal, a material sample `a` of the rod (rest
+//! arclength weight \\(w_a\\), position \\(x_a = \sum_i b_i(s_a) q_i\\)) has the gap
+//! \\(g_a = d(x_a) - r\\) and adds
+//!
+//! \\[ E = \sum_a \frac{w_a}{2r}\, \phi(g_a), \qquad
+//! \frac{\partial E}{\partial q_i} = \sum_a \frac{w_a}{2r}\, \phi'(g_a)\, b_i(s_a)\, n_a, \\]
+//!
+//! (as the floor: a length of rod equal to its diameter pressed into an obstacle resists
+//! like one self-contact). The Hessian keeps \\(\tfrac{w_a}{2r} \phi''(g_a)\, b_i b_j\,
+//! n_a n_a^T\\) and drops the surface-curvature term \\(\phi'/\rho\, (I - n n^T)\\)
+//! (negative semi-definite for a convex obstacle of radius ρ), as self-contact does.
+//! The samples are those of the self-contact detection (spacing `0.2 r` by default), so
+//! an obstacle much thinner than a knot span is still seen.
+
+use super::Contact;
+use nalgebra::{Matrix3, Vector3};
+use splinerod_core::basis::MAX_ORDER;
+use splinerod_core::{BlockBanded, CoreError, Real, Rod};
+
+/// A rigid, static obstacle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Obstacle {
+    /// The half-space on the `normal` side of the plane through `point` (unit normal).
+    Plane {
+        /// A point of the plane, m.
+        point: Vector3<Real>,
+        /// Unit normal, pointing to where the rod may be.
+        normal: Vector3<Real>,
+    },
+    /// A ball.
+    Sphere {
+        /// Centre, m.
+        centre: Vector3<Real>,
+        /// Radius, m (> 0).
+        radius: Real,
+    },
+    /// The points within `radius` of the segment `a`–`b`.
+    Capsule {
+        /// One end of the axis, m.
+        a: Vector3<Real>,
+        /// The other end, m (≠ `a`).
+        b: Vector3<Real>,
+        /// Radius, m (> 0).
+        radius: Real,
+    },
+}
+
+impl Obstacle {
+    /// Checks the shape: finite values, a unit normal, positive radii, a capsule axis of
+    /// non-zero length.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        let invalid = |name, value, reason| {
+            Err(CoreError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        let finite = |v: &Vector3<Real>| v.iter().all(|x| x.is_finite());
+        match *self {
+            Obstacle::Plane { point, normal } => {
+                if !finite(&point) {
+                    return invalid("plane point", Real::NAN, "must be finite");
+                }
+                let n = normal.norm();
+                if n.is_nan() || (n - 1.0).abs() >= 1e-12 {
+                    return invalid("plane normal", n, "must be a unit vector");
+                }
+            }
+            Obstacle::Sphere { centre, radius } => {
+                if !finite(&centre) {
+                    return invalid("sphere centre", Real::NAN, "must be finite");
+                }
+                splinerod_core::rod::positive("sphere radius", radius)?;
+            }
+            Obstacle::Capsule { a, b, radius } => {
+                if !finite(&a) || !finite(&b) {
+                    return invalid("capsule axis", Real::NAN, "must be finite");
+                }
+                if (b - a).norm() == 0.0 {
+                    return invalid("capsule axis", 0.0, "its ends must differ");
+                }
+                splinerod_core::rod::positive("capsule radius", radius)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Signed distance (m) from `x` to the surface (negative inside) and the outward
+    /// unit normal there.
+    pub fn distance(&self, x: &Vector3<Real>) -> (Real, Vector3<Real>) {
+        match *self {
+            Obstacle::Plane { point, normal } => (normal.dot(&(x - point)), normal),
+            Obstacle::Sphere { centre, radius } => away_from(x - centre, radius),
+            Obstacle::Capsule { a, b, radius } => {
+                let axis = b - a;
+                let t = ((x - a).dot(&axis) / axis.norm_squared()).clamp(0.0, 1.0);
+                away_from(x - (a + axis * t), radius)
+            }
+        }
+    }
+}
+
+/// Distance and normal from a core point at offset `v`, for a surface `radius` away.
+fn away_from(v: Vector3<Real>, radius: Real) -> (Real, Vector3<Real>) {
+    let d = v.norm();
+    // At the core itself any direction is outward; take a fixed one.
+    let n = if d > 0.0 { v / d } else { Vector3::y() };
+    (d - radius, n)
+}
+
+/// One sample near an obstacle: its gap, weight over `2r`, normal and basis row.
+pub(crate) struct ObstaclePoint<'a> {
+    pub gap: Real,
+    pub weight: Real,
+    pub normal: Vector3<Real>,
+    pub first: usize,
+    pub row: &'a [Real],
+}
+
+impl Contact {
+    /// Calls `f` for every sample of the rod within the penalty's reach of an obstacle.
+    pub(crate) fn for_each_obstacle_point(
+        &self,
+        rod: &Rod,
+        mut f: impl FnMut(&ObstaclePoint<'_>),
+    ) -> Result<(), CoreError> {
+        if self.obstacles.is_empty() {
+            return Ok(());
+        }
+        let d = self.detected(rod)?;
+        let (r, onset) = (self.params.radius, self.params.onset);
+        let samples = &d.samples;
+        for (k, x) in samples.position.iter().enumerate() {
+            for o in &self.obstacles {
+                let (distance, normal) = o.distance(x);
+                let gap = distance - r;
+                if gap < onset {
+                    f(&ObstaclePoint {
+                        gap,
+                        weight: samples.weight[k] / (2.0 * r),
+                        normal,
+                        first: samples.first[k] as usize,
+                        row: samples.row(k),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Appends, for every obstacle the rod touches, the material coordinate of its
+    /// sample closest to it (an interaction point for refinement criteria).
+    pub(crate) fn obstacle_interaction_points(
+        &self,
+        rod: &Rod,
+        out: &mut Vec<Real>,
+    ) -> Result<(), CoreError> {
+        if self.obstacles.is_empty() {
+            return Ok(());
+        }
+        let d = self.detected(rod)?;
+        let (r, onset) = (self.params.radius, self.params.onset);
+        for o in &self.obstacles {
+            let gaps = d.samples.position.iter().map(|x| o.distance(x).0 - r);
+            let closest = gaps.enumerate().min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((k, _)) = closest.filter(|(_, g)| *g < onset) {
+                out.push(d.samples.s[k]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Obstacle energy, J (module docs).
+    pub(crate) fn obstacle_energy(&self, rod: &Rod) -> Result<Real, CoreError> {
+        let mut e = 0.0;
+        self.for_each_obstacle_point(rod, |p| e += p.weight * self.penalty.value(p.gap))?;
+        Ok(e)
+    }
+
+    /// Adds the obstacles' gradient.
+    pub(crate) fn add_obstacle_gradient(
+        &self,
+        rod: &Rod,
+        gradient: &mut [Vector3<Real>],
+    ) -> Result<(), CoreError> {
+        self.for_each_obstacle_point(rod, |p| {
+            let force = p.normal * (p.weight * self.penalty.slope(p.gap));
+            for (k, b) in p.row.iter().enumerate() {
+                gradient[p.first + k] += force * *b;
+            }
+        })
+    }
+
+    /// Adds the obstacles' (positive semi-definite) Hessian.
+    pub(crate) fn add_obstacle_hessian(
+        &self,
+        rod: &Rod,
+        hessian: &mut BlockBanded,
+    ) -> Result<(), CoreError> {
+        self.for_each_obstacle_point(rod, |p| {
+            let nn: Matrix3<Real> = p.normal * p.normal.transpose();
+            let c = p.weight * self.penalty.curvature(p.gap);
+            for (a, ba) in p.row.iter().enumerate() {
+                for (b, bb) in p.row.iter().enumerate().skip(a) {
+                    hessian.add_block(p.first + a, p.first + b, &(nn * (c * ba * bb)));
+                }
+            }
+        })
+    }
+
+    /// Freezes the obstacles' friction data for a step (normal forces and directions).
+    pub(crate) fn push_obstacle_friction(
+        &self,
+        rod: &Rod,
+        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real),
+    ) -> Result<(), CoreError> {
+        let mut rows = [(0, 0.0); 2 * MAX_ORDER];
+        self.for_each_obstacle_point(rod, |p| {
+            let len = p.row.len().min(2 * MAX_ORDER);
+            for (k, (row, b)) in rows.iter_mut().zip(p.row).enumerate().take(len) {
+                *row = (p.first + k, *b);
+            }
+            push(
+                &rows[..len],
+                &p.normal,
+                -p.weight * self.penalty.slope(p.gap),
+            );
+        })
+    }
+
+    /// Number of samples touching an obstacle and the smallest distance of a centre
+    /// line from an obstacle over the rod's radius (`None` without such contacts).
+    pub(crate) fn obstacle_summary(&self, rod: &Rod) -> Result<(usize, Option<Real>), CoreError> {
+        let (mut count, mut least) = (0, None::<Real>);
+        let r = self.params.radius;
+        self.for_each_obstacle_point(rod, |p| {
+            count += 1;
+            let ratio = (p.gap + r) / r;
+            least = Some(least.map_or(ratio, |l| l.min(ratio)));
+        })?;
+        Ok((count, least))
+    }
+}

@@ -1,0 +1,105 @@
+//! Rigid obstacles in scenes: a rope draped over a sphere or a capsule is held by
+//! friction above the capstan threshold and slides off below it, without entering the
+//! obstacle; bad `[[obstacles]]` entries are refused naming the field.
+
+mod common;
+
+use common::{assert_field, rejected};
+use splinerod::{run, RunResult, Scene};
+
+fn drape(friction: f64, obstacle: &str) -> RunResult {
+    let text = std::fs::read_to_string("scenes/drape_sphere.toml").expect("scene");
+    let text = text.replace("friction = 0.5", &format!("friction = {friction}"));
+    let text = match obstacle {
+        "capsule" => text.replace(
+            "kind = \"sphere\"\ncentre = [0.0, 0.0, 0.0]",
+            "kind = \"capsule\"\na = [0.0, 0.0, -0.2]\nb = [0.0, 0.0, 0.2]",
+        ),
+        _ => text,
+    };
+    run(&Scene::from_toml(&text).expect("drape scene")).expect("drape runs")
+}
+
+/// Height of the rope's midpoint at the end, m.
+fn middle_height(r: &RunResult) -> f64 {
+    let p = &r.probes[1];
+    p.positions[p.positions.len() - 1][1]
+}
+
+#[test]
+fn friction_above_the_capstan_threshold_holds_a_draped_rope() {
+    // Threshold ln(1.8)/π = 0.19 (scene comment); 0.3 holds, 0.1 slides off.
+    for obstacle in ["sphere", "capsule"] {
+        let held = drape(0.3, obstacle);
+        assert!(
+            middle_height(&held) > 0.05,
+            "{obstacle}: {}",
+            middle_height(&held)
+        );
+        assert!(
+            held.energy["kinetic"] < 1e-4,
+            "{obstacle}: {:?}",
+            held.energy
+        );
+        let c = held.contact.expect("contact statistics");
+        let clearance = c.min_clearance_ratio.expect("touching");
+        assert!(clearance >= 0.95, "{obstacle}: clearance {clearance}");
+        let slid = drape(0.1, obstacle);
+        assert!(
+            middle_height(&slid) < -1.0,
+            "{obstacle}: {}",
+            middle_height(&slid)
+        );
+    }
+}
+
+const SCENE: &str = r#"
+[rod]
+rest_length = 1.0
+linear_density = 0.1
+stretch_stiffness = 100.0
+control_points = 8
+radius = 0.01
+[contact]
+stiffness = 1e4
+[[obstacles]]
+kind = "sphere"
+centre = [0.0, -0.5, 0.0]
+radius = 0.1
+[solver]
+method = "implicit-euler"
+dt = 0.01
+duration = 0.1
+"#;
+
+#[test]
+fn bad_obstacles_name_the_field() {
+    let cases = [
+        ("radius = 0.1", "radius = -0.1", "obstacles[0].radius"),
+        ("radius = 0.1", "radius = nan", "obstacles[0].radius"),
+        (
+            "centre = [0.0, -0.5, 0.0]",
+            "centre = [0.0, inf, 0.0]",
+            "obstacles[0].centre",
+        ),
+        ("kind = \"sphere\"", "kind = \"cube\"", "cube"),
+        ("radius = 0.1", "radius = 0.1\ncolour = 2", "colour"),
+        (
+            "kind = \"sphere\"\ncentre = [0.0, -0.5, 0.0]",
+            "kind = \"capsule\"\na = [0.0, 0.0, 0.0]\nb = [0.0, 0.0, 0.0]",
+            "obstacles[0].b",
+        ),
+        (
+            "kind = \"sphere\"\ncentre = [0.0, -0.5, 0.0]\nradius = 0.1",
+            "kind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 0.0]",
+            "obstacles[0].normal",
+        ),
+        ("[contact]\nstiffness = 1e4\n", "", "obstacles[0]"),
+    ];
+    for (from, to, field) in cases {
+        assert!(SCENE.contains(from), "{from}");
+        let message = rejected(&SCENE.replace(from, to));
+        assert_field(&message, field);
+    }
+    assert!(Scene::from_toml(SCENE).is_ok());
+}
