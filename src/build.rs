@@ -1,6 +1,7 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
+use crate::path::Path;
 use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene, StretchFormulationSpec};
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
@@ -151,18 +152,18 @@ impl Scene {
         for (i, spec) in self.pins.iter().enumerate() {
             let pin = Pin::here(&system.rod, spec.at * l)?;
             if let Some(p) = spec.position {
-                let gap = (Vector3::from(p) - pin.position).norm();
-                if gap > 1e-9 * l.max(1.0) {
-                    let reason = format!(
-                        "the rod starts at {:?} there ({gap:.3e} m away); pins must agree with the initial shape",
-                        pin.position.as_slice()
-                    );
-                    return Err(Error::field(
-                        format!("pins[{i}].position"),
-                        format!("{p:?}"),
-                        reason,
-                    ));
+                agrees(&format!("pins[{i}].position"), p, pin.position, l)?;
+            }
+            if let Some(keyframes) = &spec.path {
+                let field = format!("pins[{i}].path");
+                let path = Path::new(keyframes, spec.interpolation, &field)?;
+                let (t0, p0) = path.start();
+                if t0 != 0.0 {
+                    let reason = "the first keyframe must be at time 0 (where the point starts)";
+                    return Err(Error::field(format!("{field}[0]"), t0, reason));
                 }
+                agrees(&format!("{field}[0]"), p0.into(), pin.position, l)?;
+                system = system.with_driver(i, path);
             }
             if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {
                 let stiffness = Clamp::stiffness_for(ei, l);
@@ -281,4 +282,19 @@ impl Scene {
     pub fn material_coordinate(&self, fraction: Real) -> Real {
         fraction * self.rod.rest_length
     }
+}
+
+/// An error naming `field` unless the position `given` for a pin agrees with where the
+/// rod starts there (`actual`), to 1e-9 of the rod's length `l`: a pin never makes the
+/// rod jump.
+fn agrees(field: &str, given: [Real; 3], actual: Vector3<Real>, l: Real) -> Result<(), Error> {
+    let gap = (Vector3::from(given) - actual).norm();
+    if gap > 1e-9 * l.max(1.0) {
+        let reason = format!(
+            "the rod starts at {:?} there ({gap:.3e} m away); pins must agree with the initial shape",
+            actual.as_slice()
+        );
+        return Err(Error::field(field, format!("{given:?}"), reason));
+    }
+    Ok(())
 }

@@ -50,6 +50,7 @@ mod knot_track;
 pub mod locking;
 pub mod observe;
 pub mod output;
+pub mod path;
 pub mod problems;
 pub mod report;
 pub mod report_adaptive;
@@ -78,7 +79,7 @@ pub use runner::{run, run_observed, RunResult};
 pub use scene::Scene;
 pub use simulation::Simulation;
 pub use step_report::{StageTimes, StepReport};
-pub use system::RodSystem;
+pub use system::{PinDriver, RodSystem};
 
 pub use splinerod_adaptivity as adaptivity;
 pub use splinerod_core as core;

@@ -5,6 +5,7 @@
 //! Unknown fields are rejected, missing ones named by the parser, and every value is
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
+use crate::path::Interpolation;
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
@@ -149,6 +150,12 @@ pub struct PinSpec {
     /// Also hold the tangent direction there (a clamp; needs `rod.bending_stiffness`).
     #[serde(default)]
     pub clamp: bool,
+    /// Keyframes `[t, x, y, z]` (s, m) the pin follows: the first at time 0 where the
+    /// point starts, times increasing ([`crate::path`]).
+    pub path: Option<Vec<[f64; 4]>>,
+    /// How the path moves between keyframes. Default linear.
+    #[serde(default)]
+    pub interpolation: Interpolation,
 }
 
 /// `[world]`.

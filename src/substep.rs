@@ -24,10 +24,12 @@
 //! the implicit midpoint rule) is not unconditionally stable for nonlinear elasticity:
 //! at long steps it can pump energy into the stiff modes until it blows up. The total
 //! energy `H` (kinetic `K` plus potential) may only grow by the work `W` of the grabs'
-//! moving targets `p` (the only forces that do work on a [`crate::RodSystem`] during a
-//! step; damping and pins take energy out or do none), estimated by the trapezoidal
-//! rule in the state, \\(W \approx \tfrac12\big[E(q^0, p^1) - E(q^0, p^0) + E(q^+, p^1) -
-//! E(q^+, p^0)\big]\\). A sub-step with \\(H^+ - H^0 - W > 10^{-2} (K^0 + K^+)\\)
+//! moving targets `p` and of driven pins (the only forces that do work on a
+//! [`crate::RodSystem`] during a step; damping and fixed pins take energy out or do
+//! none): for the grabs estimated by the trapezoidal rule in the state,
+//! \\(W \approx \tfrac12\big[E(q^0, p^1) - E(q^0, p^0) + E(q^+, p^1) -
+//! E(q^+, p^0)\big]\\), for a driven pin its force during the step times its
+//! displacement. A sub-step with \\(H^+ - H^0 - W > 10^{-2} (K^0 + K^+)\\)
 //! ([`ENERGY_GAIN`]) is rejected and halved like a failed solve.
 //!
 //! [`Integrator::conserves_energy`]: splinerod_integrators::Integrator::conserves_energy
@@ -84,6 +86,8 @@ pub(crate) struct SubstepState {
     saved_v: Vec<Vector3<Real>>,
     /// The grabs' targets at the start of the sub-step.
     targets: Vec<Vector3<Real>>,
+    /// The pins' positions at the start of the sub-step.
+    pins: Vec<Vector3<Real>>,
 }
 
 /// The controller's memory without its scratch buffers: what a recomputed step must
@@ -208,6 +212,10 @@ impl Simulation {
         }
         let drivers = Instant::now();
         self.system.time = end;
+        self.substep.pins.clear();
+        let pins = self.system.pins.iter().map(|p| p.position);
+        self.substep.pins.extend(pins);
+        self.system.drive(end);
         self.substep.targets.clear();
         let rod = &self.system.rod;
         for g in self.system.grabs.iter_mut() {
@@ -236,7 +244,7 @@ impl Simulation {
         }
         if guard {
             let after = self.total_energy();
-            let work = 0.5 * (work_start + self.target_swap_energy_gap());
+            let work = 0.5 * (work_start + self.target_swap_energy_gap()) + self.pin_work();
             let gain = after.0 - before.0 - work;
             let allowed =
                 ENERGY_GAIN * (before.1 + after.1) + 1e-12 * (before.0.abs() + after.0.abs());
@@ -265,6 +273,23 @@ impl Simulation {
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
         now - then
+    }
+
+    /// Work the driven pins did on the rod in the sub-step just solved, J: the forces
+    /// they exerted (the integrator's, constant over the step) times their displacement
+    /// (0 if the integrator does not report pin forces).
+    fn pin_work(&self) -> Real {
+        if self.system.drivers.is_empty() {
+            return 0.0; // fixed pins do no work
+        }
+        let forces = self.integrator.pin_forces();
+        let moved = self.system.pins.iter().zip(&self.substep.pins);
+        let displacement = moved.map(|(p, p0)| p.position - p0);
+        forces
+            .iter()
+            .zip(displacement)
+            .map(|(f, d)| f.dot(&d))
+            .sum()
     }
 
     /// Total and kinetic energy of the system now, J.

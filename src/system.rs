@@ -12,7 +12,17 @@
 //! the next step, solve or estimate refuses to run on it
 //! ([`crate::Error::KnotsChangedUnheard`]) instead of reading stale caches.
 
+use crate::path::Path;
 use crate::{Error, Grab};
+
+/// A pin (by index in [`RodSystem::pins`]) whose position follows a keyframed path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PinDriver {
+    /// Index of the pin.
+    pub pin: usize,
+    /// Its positions over time.
+    pub path: Path,
+}
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
 use splinerod_energies::{Energy, EnergySummary};
@@ -30,6 +40,8 @@ pub struct RodSystem {
     pub grabs: Vec<Grab>,
     /// Simulated time the grabs are evaluated at (the end of the step being solved).
     pub time: Real,
+    /// Pins moved along keyframed paths ([`RodSystem::drive`]).
+    pub drivers: Vec<PinDriver>,
     /// The rod's topology epoch when the energies last heard of its knots.
     heard_epoch: u64,
 }
@@ -44,6 +56,7 @@ impl RodSystem {
             energies: Vec::new(),
             grabs: Vec::new(),
             time: 0.0,
+            drivers: Vec::new(),
         }
     }
 
@@ -63,6 +76,21 @@ impl RodSystem {
     pub fn with_grab(mut self, grab: Grab) -> Self {
         self.grabs.push(grab);
         self
+    }
+
+    /// Drives pin `pin` along `path` (builder style).
+    pub fn with_driver(mut self, pin: usize, path: Path) -> Self {
+        self.drivers.push(PinDriver { pin, path });
+        self
+    }
+
+    /// Moves every driven pin to its path's position at time `t`.
+    pub fn drive(&mut self, t: Real) {
+        for d in &self.drivers {
+            if let Some(pin) = self.pins.get_mut(d.pin) {
+                pin.position = d.path.at(t);
+            }
+        }
     }
 
     /// The springs of the grabs active at [`time`](Self::time).
@@ -212,6 +240,7 @@ impl std::fmt::Debug for RodSystem {
             .field("pins", &self.pins)
             .field("energies", &names)
             .field("grabs", &self.grabs)
+            .field("drivers", &self.drivers)
             .finish()
     }
 }

@@ -103,3 +103,25 @@ fn bad_obstacles_name_the_field() {
     }
     assert!(Scene::from_toml(SCENE).is_ok());
 }
+
+#[test]
+fn a_thread_is_pulled_through_a_ring_of_capsules() {
+    let scene = Scene::load("scenes/suture_ring.toml").expect("suture scene");
+    let result = run(&scene).expect("suture runs");
+    let c = result.contact.expect("contact statistics");
+    assert!(c.max_obstacle_contacts > 0, "{c:?}");
+    assert!(c.min_clearance_ratio.expect("touching") >= 0.95, "{c:?}");
+    // The free end's last passage of the ring's plane x = 0.5 is through its opening
+    // (radius 0.03 less the capsules' and the thread's radii), and it stays beyond.
+    let free = &result.probes[0];
+    let mut last = None;
+    for w in free.positions.windows(2) {
+        if (w[0][0] - 0.5) * (w[1][0] - 0.5) < 0.0 {
+            last = Some(w[1]);
+        }
+    }
+    let through = last.expect("the free end crossed the ring's plane");
+    assert!(through[1].hypot(through[2]) < 0.02, "{through:?}");
+    let end = free.positions[free.positions.len() - 1];
+    assert!(end[0] > 0.55, "{end:?}");
+}
