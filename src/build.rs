@@ -177,6 +177,9 @@ impl Scene {
             let grab = Grab::new(g.at * l, Vector3::from(g.to), times, g.stiffness)?;
             system = system.with_grab(grab);
         }
+        for load in self.loads()? {
+            system = system.with_load(load);
+        }
         if let Some(contact) = self.contact()? {
             system = system.with_energy(contact);
         }

@@ -62,6 +62,7 @@ pub mod scene;
 mod scene_adapt;
 mod scene_contact;
 mod scene_ensemble;
+mod scene_loads;
 mod scene_obstacles;
 mod scene_shape;
 mod scene_solver;
@@ -79,7 +80,7 @@ pub use runner::{run, run_observed, RunResult};
 pub use scene::Scene;
 pub use simulation::Simulation;
 pub use step_report::{StageTimes, StepReport};
-pub use system::{PinDriver, RodSystem};
+pub use system::{Load, PinDriver, RodSystem};
 
 pub use splinerod_adaptivity as adaptivity;
 pub use splinerod_core as core;

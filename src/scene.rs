@@ -9,6 +9,7 @@ use crate::path::Interpolation;
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
+pub use crate::scene_loads::LoadSpec;
 pub use crate::scene_obstacles::ObstacleSpec;
 pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
@@ -47,6 +48,9 @@ pub struct Scene {
     /// Rigid obstacles (with `[contact]`'s penalty and friction).
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,
+    /// Point loads.
+    #[serde(default)]
+    pub loads: Vec<LoadSpec>,
 }
 
 /// `[rod]`.
@@ -381,6 +385,7 @@ impl Scene {
             c.validate(self.rod.radius)?;
         }
         self.validate_obstacles()?;
+        self.loads()?;
         crate::scene_adapt::validate(
             self.adaptivity.as_ref(),
             &self.grabs,

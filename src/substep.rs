@@ -88,6 +88,8 @@ pub(crate) struct SubstepState {
     targets: Vec<Vector3<Real>>,
     /// The pins' positions at the start of the sub-step.
     pins: Vec<Vector3<Real>>,
+    /// The loads' forces at the start of the sub-step.
+    loads: Vec<Vector3<Real>>,
 }
 
 /// The controller's memory without its scratch buffers: what a recomputed step must
@@ -215,6 +217,9 @@ impl Simulation {
         self.substep.pins.clear();
         let pins = self.system.pins.iter().map(|p| p.position);
         self.substep.pins.extend(pins);
+        self.substep.loads.clear();
+        let loads = self.system.loads.iter().map(|l| l.force.force);
+        self.substep.loads.extend(loads);
         self.system.drive(end);
         self.substep.targets.clear();
         let rod = &self.system.rod;
@@ -257,11 +262,20 @@ impl Simulation {
 
     /// `E(q, p₁) − E(q, p₀)` at the rod's current positions `q`: the energy the grabs'
     /// targets add by moving from their start-of-step positions `p₀` (saved in
-    /// `substep.targets`) to their current ones `p₁`. Zero without grabs.
+    /// `substep.targets`) to their current ones `p₁`, and the loads' forces by changing
+    /// (`−(F₁ − F₀)·C(s)`). Zero without grabs or keyframed loads.
     fn target_swap_energy_gap(&mut self) -> Real {
         use splinerod_integrators::System;
+        let rod = &self.system.rod;
+        let changed = self.system.loads.iter().zip(&self.substep.loads);
+        let loads: Real = changed
+            .map(|(l, f0)| match rod.point(l.force.at) {
+                Ok(x) => -(l.force.force - f0).dot(&x),
+                Err(_) => Real::NAN,
+            })
+            .sum();
         if self.system.grabs.is_empty() {
-            return 0.0;
+            return loads;
         }
         let now = self.system.potential_energy();
         let swap = |grabs: &mut [crate::Grab], targets: &mut [Vector3<Real>]| {
@@ -272,7 +286,7 @@ impl Simulation {
         swap(&mut self.system.grabs, &mut self.substep.targets);
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
-        now - then
+        now - then + loads
     }
 
     /// Work the driven pins did on the rod in the sub-step just solved, J: the forces

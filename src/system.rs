@@ -15,6 +15,16 @@
 use crate::path::Path;
 use crate::{Error, Grab};
 
+/// A force at a material point, constant or following a keyframed path of forces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Load {
+    /// The force now (the energy term).
+    pub force: PointForce,
+    /// Keyframes of the force (`[t, Fx, Fy, Fz]` as positions of a [`Path`]); `None`:
+    /// constant.
+    pub path: Option<Path>,
+}
+
 /// A pin (by index in [`RodSystem::pins`]) whose position follows a keyframed path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PinDriver {
@@ -25,7 +35,7 @@ pub struct PinDriver {
 }
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
-use splinerod_energies::{Energy, EnergySummary};
+use splinerod_energies::{Energy, EnergySummary, PointForce};
 use splinerod_integrators::System;
 
 /// A rod with pins and a list of energies. All fields are public state.
@@ -42,6 +52,8 @@ pub struct RodSystem {
     pub time: Real,
     /// Pins moved along keyframed paths ([`RodSystem::drive`]).
     pub drivers: Vec<PinDriver>,
+    /// Point loads (their forces follow their paths, [`RodSystem::drive`]).
+    pub loads: Vec<Load>,
     /// The rod's topology epoch when the energies last heard of its knots.
     heard_epoch: u64,
 }
@@ -57,6 +69,7 @@ impl RodSystem {
             grabs: Vec::new(),
             time: 0.0,
             drivers: Vec::new(),
+            loads: Vec::new(),
         }
     }
 
@@ -84,11 +97,23 @@ impl RodSystem {
         self
     }
 
-    /// Moves every driven pin to its path's position at time `t`.
+    /// Adds a load (builder style).
+    pub fn with_load(mut self, load: Load) -> Self {
+        self.loads.push(load);
+        self
+    }
+
+    /// Moves every driven pin to its path's position at time `t`, and sets every
+    /// keyframed load's force.
     pub fn drive(&mut self, t: Real) {
         for d in &self.drivers {
             if let Some(pin) = self.pins.get_mut(d.pin) {
                 pin.position = d.path.at(t);
+            }
+        }
+        for load in &mut self.loads {
+            if let Some(path) = &load.path {
+                load.force.force = path.at(t);
             }
         }
     }
@@ -101,12 +126,13 @@ impl RodSystem {
             .map(|g| &g.spring as &dyn Energy)
     }
 
-    /// Every energy acting now: the energies, then the active grabs.
+    /// Every energy acting now: the energies, the active grabs, then the loads.
     pub fn acting(&self) -> impl Iterator<Item = &dyn Energy> + '_ {
         self.energies
             .iter()
             .map(|e| e.as_ref())
             .chain(self.active_grabs())
+            .chain(self.loads.iter().map(|l| &l.force as &dyn Energy))
     }
 
     /// Changes the rod's knots through `change`, which receives the rod and a listener
@@ -241,6 +267,7 @@ impl std::fmt::Debug for RodSystem {
             .field("energies", &names)
             .field("grabs", &self.grabs)
             .field("drivers", &self.drivers)
+            .field("loads", &self.loads)
             .finish()
     }
 }

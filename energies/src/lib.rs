@@ -37,6 +37,7 @@ pub mod conformance;
 pub mod contact;
 mod energy;
 mod gravity;
+mod point_force;
 mod point_spring;
 mod stretching;
 
@@ -45,5 +46,6 @@ pub use clamp::Clamp;
 pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary};
 pub use gravity::Gravity;
+pub use point_force::PointForce;
 pub use point_spring::PointSpring;
 pub use stretching::{Multipliers, StretchFormulation, Stretching};

@@ -1,0 +1,53 @@
+//! The `[[loads]]` scene tables (documented in `scenes/README.md`): a force at a
+//! material point, constant (`force`) or keyframed (`path` of `[t, Fx, Fy, Fz]`).
+
+use crate::path::{Interpolation, Path};
+use crate::scene::{finite_vec, fraction, Scene};
+use crate::{Error, Load};
+use nalgebra::Vector3;
+use serde::Deserialize;
+use splinerod_energies::PointForce;
+
+/// One `[[loads]]` entry.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    /// Material coordinate, fraction of the rest length in `[0, 1]`.
+    pub at: f64,
+    /// A constant force, N.
+    pub force: Option<[f64; 3]>,
+    /// Keyframes `[t, Fx, Fy, Fz]` (s, N) of a force changing in time.
+    pub path: Option<Vec<[f64; 4]>>,
+    /// How the force changes between keyframes. Default linear.
+    #[serde(default)]
+    pub interpolation: Interpolation,
+}
+
+impl Scene {
+    /// The loads of `[[loads]]`, validated (errors name `loads[i].<field>`).
+    pub fn loads(&self) -> Result<Vec<Load>, Error> {
+        let l = self.rod.rest_length;
+        let mut loads = Vec::with_capacity(self.loads.len());
+        for (i, spec) in self.loads.iter().enumerate() {
+            fraction(&format!("loads[{i}].at"), spec.at)?;
+            let (force, path) = match (&spec.force, &spec.path) {
+                (Some(f), None) => {
+                    finite_vec(&format!("loads[{i}].force"), *f)?;
+                    (Vector3::from(*f), None)
+                }
+                (None, Some(keyframes)) => {
+                    let field = format!("loads[{i}].path");
+                    let path = Path::new(keyframes, spec.interpolation, &field)?;
+                    (path.at(0.0), Some(path))
+                }
+                _ => {
+                    let reason = "give exactly one of force (constant) and path (keyframed)";
+                    return Err(Error::field(format!("loads[{i}].force"), "?", reason));
+                }
+            };
+            let force = PointForce::new(spec.at * l, force)?;
+            loads.push(Load { force, path });
+        }
+        Ok(loads)
+    }
+}
