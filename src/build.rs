@@ -156,13 +156,14 @@ impl Scene {
             }
             if let Some(keyframes) = &spec.path {
                 let field = format!("pins[{i}].path");
+                // Times and values were checked by `Scene::validate`.
                 let path = Path::new(keyframes, spec.interpolation, &field)?;
-                let (t0, p0) = path.start();
-                if t0 != 0.0 {
-                    let reason = "the first keyframe must be at time 0 (where the point starts)";
-                    return Err(Error::field(format!("{field}[0]"), t0, reason));
-                }
-                agrees(&format!("{field}[0]"), p0.into(), pin.position, l)?;
+                agrees(
+                    &format!("{field}[0]"),
+                    path.start().1.into(),
+                    pin.position,
+                    l,
+                )?;
                 system = system.with_driver(i, path);
             }
             if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {

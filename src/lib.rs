@@ -64,6 +64,7 @@ mod scene_contact;
 mod scene_ensemble;
 mod scene_loads;
 mod scene_obstacles;
+mod scene_pins;
 mod scene_shape;
 mod scene_solver;
 mod simulation;

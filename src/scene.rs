@@ -5,12 +5,12 @@
 //! Unknown fields are rejected, missing ones named by the parser, and every value is
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
-use crate::path::Interpolation;
 pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene_contact::ContactSpec;
 pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
 pub use crate::scene_loads::LoadSpec;
 pub use crate::scene_obstacles::ObstacleSpec;
+pub use crate::scene_pins::{PinSpec, WorldSpec};
 pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
@@ -139,47 +139,6 @@ pub enum KnotsSpec {
 impl Default for KnotsSpec {
     fn default() -> Self {
         Self::Named("clamped".into())
-    }
-}
-
-/// `[[pins]]`.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PinSpec {
-    /// Material coordinate, fraction of the rest length in `[0, 1]`.
-    pub at: f64,
-    /// Held position, m. Default: where the point starts; if given it must agree with the
-    /// initial shape (a pin never makes the rod jump).
-    pub position: Option<[f64; 3]>,
-    /// Also hold the tangent direction there (a clamp; needs `rod.bending_stiffness`).
-    #[serde(default)]
-    pub clamp: bool,
-    /// Keyframes `[t, x, y, z]` (s, m) the pin follows: the first at time 0 where the
-    /// point starts, times increasing ([`crate::path`]).
-    pub path: Option<Vec<[f64; 4]>>,
-    /// How the path moves between keyframes. Default linear.
-    #[serde(default)]
-    pub interpolation: Interpolation,
-}
-
-/// `[world]`.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct WorldSpec {
-    /// Gravity, m/s². Default `[0, -9.81, 0]`.
-    #[serde(default = "default_gravity")]
-    pub gravity: [f64; 3],
-}
-
-fn default_gravity() -> [f64; 3] {
-    [0.0, -9.81, 0.0]
-}
-
-impl Default for WorldSpec {
-    fn default() -> Self {
-        Self {
-            gravity: default_gravity(),
-        }
     }
 }
 
@@ -344,16 +303,7 @@ impl Scene {
             return Err(Error::field("rod.control_points", r.control_points, reason));
         }
         self.validate_shape()?;
-        for (i, pin) in self.pins.iter().enumerate() {
-            fraction(&format!("pins[{i}].at"), pin.at)?;
-            if let Some(p) = pin.position {
-                finite_vec(&format!("pins[{i}].position"), p)?;
-            }
-            if pin.clamp && r.bending_stiffness.is_none() {
-                let reason = "a clamp holds the tangent against bending: set rod.bending_stiffness";
-                return Err(Error::field(format!("pins[{i}].clamp"), true, reason));
-            }
-        }
+        self.validate_pins()?;
         finite_vec("world.gravity", self.world.gravity)?;
         self.validate_solver()?;
         if self.output.samples < 2 {
