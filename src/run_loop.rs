@@ -218,11 +218,16 @@ pub(crate) fn run_scene(
     let start = Instant::now();
     for _ in 0..stages {
         let stage_start = Instant::now();
-        if statics {
-            ensemble.settle()?;
+        let advanced = if statics {
+            ensemble.settle()
         } else {
-            ensemble.step(dt)?;
-        }
+            ensemble.step(dt)
+        };
+        // A single run's error is its own, not an ensemble member's.
+        advanced.map_err(|e| match e {
+            Error::Member { source, .. } if scene.ensemble.is_none() => *source,
+            e => e,
+        })?;
         let Ensemble {
             members: sims,
             reports,

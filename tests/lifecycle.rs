@@ -282,3 +282,21 @@ fn a_static_solve_adapts_to_its_tolerance() {
         assert_eq!(sim.steps, 0);
     }
 }
+
+#[test]
+fn a_single_run_reports_its_own_errors() {
+    // A step far too long for Newton with one iteration and no sub-stepping room.
+    let text = with_method(CUT_CABLE, "implicit-midpoint")
+        .replace("dt = 0.02", "dt = 2.0")
+        .replace(
+            "[output]",
+            "newton_iterations = 1\nmin_dt = 2.0\n\n[output]",
+        )
+        .replace(
+            "[solver]\nmethod",
+            "[solver]\naccept_unconverged = false\nmethod",
+        );
+    let err = run(&Scene::from_toml(&text).unwrap()).unwrap_err();
+    assert!(matches!(err, Error::Integrator(_)), "{err}");
+    assert!(!err.to_string().contains("ensemble"), "{err}");
+}
