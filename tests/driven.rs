@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_field, rejected};
+use common::{assert_field, rejected, sample_gap};
 use nalgebra::Vector3;
 use splinerod::path::{Interpolation, Path};
 use splinerod::{run, Scene};
@@ -97,13 +97,7 @@ fn a_static_solve_holds_the_driven_pin_at_the_path_end() {
             "method = \"static\"",
         );
     let direct = run(&Scene::from_toml(&direct).expect("scene")).expect("static runs");
-    let gap = driven
-        .samples
-        .positions
-        .iter()
-        .zip(&direct.samples.positions)
-        .map(|(a, b)| (Vector3::from(*a) - Vector3::from(*b)).norm())
-        .fold(0.0, f64::max);
+    let gap = sample_gap(&driven, &direct);
     assert!(gap < 1e-8, "{gap:e}");
 }
 

@@ -1,6 +1,9 @@
 //! One path for knot changes, energies' lifecycle hooks, static solves through the
 //! same stages as time steps.
 
+mod common;
+
+use common::sample_gap;
 use nalgebra::Vector3;
 use splinerod::adaptivity::{AdaptParams, Adapter, InteractionCriterion};
 use splinerod::prelude::*;
@@ -43,14 +46,6 @@ fn with_method(text: &str, method: &str) -> String {
         "method = \"static\"",
         &format!("method = \"{method}\"\ndt = 0.02\nduration = 30.0"),
     )
-}
-
-/// Largest distance between the sampled end positions of two runs, m.
-fn sample_gap(a: &splinerod::RunResult, b: &splinerod::RunResult) -> f64 {
-    let pairs = a.samples.positions.iter().zip(&b.samples.positions);
-    pairs
-        .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
-        .fold(0.0, f64::max)
 }
 
 #[test]

@@ -42,10 +42,10 @@
 
 mod assemble;
 pub mod detect;
-mod floor;
 mod friction;
 pub mod obstacle;
 mod penalty;
+mod surface;
 
 use crate::{Energy, EnergySummary};
 use detect::{ContactPoint, Detector, SamplePair};
@@ -324,8 +324,7 @@ impl Contact {
             friction.push(&weights[..len], &c.normal, lambda);
         }
         drop(d);
-        self.push_floor_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda));
-        self.push_obstacle_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda))
+        self.push_surface_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda))
     }
 
     fn friction_state(&self) -> MutexGuard<'_, Friction> {
@@ -407,15 +406,14 @@ impl Energy for Contact {
         let Ok(d) = self.detected(rod) else {
             return Real::NAN;
         };
-        let mut e: Real = d
+        let e: Real = d
             .pairs
             .iter()
             .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(c)))
             .sum();
         drop(d);
-        e += self.floor_energy(rod);
-        let obstacles = self.obstacle_energy(rod).unwrap_or(Real::NAN);
-        e + obstacles + self.friction_state().energy(rod, self.params.friction)
+        let surfaces = self.surface_energy(rod).unwrap_or(Real::NAN);
+        e + surfaces + self.friction_state().energy(rod, self.params.friction)
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
@@ -434,8 +432,7 @@ impl Energy for Contact {
             }
         }
         drop(d);
-        self.add_floor_gradient(rod, gradient);
-        if self.add_obstacle_gradient(rod, gradient).is_err() {
+        if self.add_surface_gradient(rod, gradient).is_err() {
             gradient
                 .iter_mut()
                 .for_each(|g| *g = Vector3::repeat(Real::NAN));
@@ -474,8 +471,7 @@ impl Energy for Contact {
         local.flush(hessian);
         d.group_hessian = local;
         drop(d);
-        self.add_floor_hessian(rod, hessian);
-        if self.add_obstacle_hessian(rod, hessian).is_err() {
+        if self.add_surface_hessian(rod, hessian).is_err() {
             hessian.scale(Real::NAN);
             return;
         }

@@ -2,6 +2,7 @@
 //! line, and assert that a scene is rejected with an error naming the field and value.
 #![allow(dead_code)] // each test binary uses a different subset
 
+use splinerod::prelude::Vector3;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -91,4 +92,12 @@ pub fn assert_needs_positive_in(text: &str, key: &str, field: &str) {
             &shown(value),
         );
     }
+}
+
+/// Largest distance between the sampled end positions of two runs, m.
+pub fn sample_gap(a: &splinerod::RunResult, b: &splinerod::RunResult) -> f64 {
+    let pairs = a.samples.positions.iter().zip(&b.samples.positions);
+    pairs
+        .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
+        .fold(0.0, f64::max)
 }

@@ -16,10 +16,10 @@
 //! The samples are those of the self-contact detection (spacing `0.2 r` by default), so
 //! an obstacle much thinner than a knot span is still seen.
 
+use super::surface::PenaltyPoint;
 use super::Contact;
-use nalgebra::{Matrix3, Vector3};
-use splinerod_core::basis::MAX_ORDER;
-use splinerod_core::{BlockBanded, CoreError, Real, Rod};
+use nalgebra::Vector3;
+use splinerod_core::{CoreError, Real, Rod};
 
 /// A rigid, static obstacle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,21 +113,12 @@ fn away_from(v: Vector3<Real>, radius: Real) -> (Real, Vector3<Real>) {
     (d - radius, n)
 }
 
-/// One sample near an obstacle: its gap, weight over `2r`, normal and basis row.
-pub(crate) struct ObstaclePoint<'a> {
-    pub gap: Real,
-    pub weight: Real,
-    pub normal: Vector3<Real>,
-    pub first: usize,
-    pub row: &'a [Real],
-}
-
 impl Contact {
     /// Calls `f` for every sample of the rod within the penalty's reach of an obstacle.
     pub(crate) fn for_each_obstacle_point(
         &self,
         rod: &Rod,
-        mut f: impl FnMut(&ObstaclePoint<'_>),
+        mut f: impl FnMut(&PenaltyPoint<'_>),
     ) -> Result<(), CoreError> {
         if self.obstacles.is_empty() {
             return Ok(());
@@ -140,7 +131,7 @@ impl Contact {
                 let (distance, normal) = o.distance(x);
                 let gap = distance - r;
                 if gap < onset {
-                    f(&ObstaclePoint {
+                    f(&PenaltyPoint {
                         gap,
                         weight: samples.weight[k] / (2.0 * r),
                         normal,
@@ -173,64 +164,6 @@ impl Contact {
             }
         }
         Ok(())
-    }
-
-    /// Obstacle energy, J (module docs).
-    pub(crate) fn obstacle_energy(&self, rod: &Rod) -> Result<Real, CoreError> {
-        let mut e = 0.0;
-        self.for_each_obstacle_point(rod, |p| e += p.weight * self.penalty.value(p.gap))?;
-        Ok(e)
-    }
-
-    /// Adds the obstacles' gradient.
-    pub(crate) fn add_obstacle_gradient(
-        &self,
-        rod: &Rod,
-        gradient: &mut [Vector3<Real>],
-    ) -> Result<(), CoreError> {
-        self.for_each_obstacle_point(rod, |p| {
-            let force = p.normal * (p.weight * self.penalty.slope(p.gap));
-            for (k, b) in p.row.iter().enumerate() {
-                gradient[p.first + k] += force * *b;
-            }
-        })
-    }
-
-    /// Adds the obstacles' (positive semi-definite) Hessian.
-    pub(crate) fn add_obstacle_hessian(
-        &self,
-        rod: &Rod,
-        hessian: &mut BlockBanded,
-    ) -> Result<(), CoreError> {
-        self.for_each_obstacle_point(rod, |p| {
-            let nn: Matrix3<Real> = p.normal * p.normal.transpose();
-            let c = p.weight * self.penalty.curvature(p.gap);
-            for (a, ba) in p.row.iter().enumerate() {
-                for (b, bb) in p.row.iter().enumerate().skip(a) {
-                    hessian.add_block(p.first + a, p.first + b, &(nn * (c * ba * bb)));
-                }
-            }
-        })
-    }
-
-    /// Freezes the obstacles' friction data for a step (normal forces and directions).
-    pub(crate) fn push_obstacle_friction(
-        &self,
-        rod: &Rod,
-        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real),
-    ) -> Result<(), CoreError> {
-        let mut rows = [(0, 0.0); 2 * MAX_ORDER];
-        self.for_each_obstacle_point(rod, |p| {
-            let len = p.row.len().min(2 * MAX_ORDER);
-            for (k, (row, b)) in rows.iter_mut().zip(p.row).enumerate().take(len) {
-                *row = (p.first + k, *b);
-            }
-            push(
-                &rows[..len],
-                &p.normal,
-                -p.weight * self.penalty.slope(p.gap),
-            );
-        })
     }
 
     /// Number of samples touching an obstacle and the smallest distance of a centre
