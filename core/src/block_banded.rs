@@ -26,8 +26,21 @@ pub struct FarBlock {
     pub block: Matrix3<Real>,
 }
 
+/// A symmetric positive semi-definite rank-one term \\(c\, u u^T\\) of a [`BlockBanded`]
+/// matrix: a coupling of every control point with every other (the twist of a rod between
+/// two clamps depends on the whole centreline), kept as a vector instead of `n²` blocks.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LowRank {
+    /// The coefficient `c ≥ 0`.
+    pub coefficient: Real,
+    /// The vector `u`, one entry per control point.
+    pub vector: Vec<Vector3<Real>>,
+}
+
 /// A symmetric matrix of 3×3 blocks with `bandwidth` block off-diagonals on each side,
-/// plus any number of [`FarBlock`]s outside the band.
+/// plus any number of [`FarBlock`]s outside the band and of [`LowRank`] terms
+/// \\(c\, u u^T\\) (which [`block`](BlockBanded::block) does not include; solvers apply
+/// them by the Sherman–Morrison formula).
 ///
 /// [`add_block`](BlockBanded::add_block)`(i, j, B)` means \\(A_{ij} \mathrel{+}= B\\) and,
 /// for `i ≠ j`, \\(A_{ji} \mathrel{+}= B^T\\): assemble each unordered pair once.
@@ -37,6 +50,10 @@ pub struct BlockBanded {
     bandwidth: usize,
     blocks: Vec<Matrix3<Real>>,
     far: Vec<FarBlock>,
+    /// Low-rank terms; only the first `low_rank_used` are live (the rest keep their
+    /// allocations for the next assembly).
+    low_rank: Vec<LowRank>,
+    low_rank_used: usize,
 }
 
 impl BlockBanded {
@@ -47,6 +64,8 @@ impl BlockBanded {
             bandwidth,
             blocks: vec![Matrix3::zeros(); n * (bandwidth + 1)],
             far: Vec::new(),
+            low_rank: Vec::new(),
+            low_rank_used: 0,
         }
     }
 
@@ -58,6 +77,43 @@ impl BlockBanded {
         self.blocks.clear();
         self.blocks.resize(n * (bandwidth + 1), Matrix3::zeros());
         self.far.clear();
+        self.low_rank_used = 0;
+    }
+
+    /// Adds the term \\(c\, u u^T\\) (`c ≥ 0`, `u` one entry per control point).
+    /// Reuses the storage of earlier assemblies: no allocation once sized.
+    #[track_caller]
+    pub fn add_low_rank(&mut self, coefficient: Real, u: &[Vector3<Real>]) {
+        assert!(u.len() == self.n, "dimension mismatch");
+        self.add_low_rank_with(coefficient, |v| v.copy_from_slice(u));
+    }
+
+    /// Adds the term \\(c\, u u^T\\) with `u` written by `fill` into a zeroed vector of
+    /// one entry per control point (no allocation once sized).
+    pub fn add_low_rank_with(
+        &mut self,
+        coefficient: Real,
+        fill: impl FnOnce(&mut [Vector3<Real>]),
+    ) {
+        if self.low_rank_used == self.low_rank.len() {
+            self.low_rank.push(LowRank::default());
+        }
+        let term = &mut self.low_rank[self.low_rank_used];
+        term.coefficient = coefficient;
+        term.vector.clear();
+        term.vector.resize(self.n, Vector3::zeros());
+        fill(&mut term.vector);
+        self.low_rank_used += 1;
+    }
+
+    /// The low-rank terms \\(c\, u u^T\\), in the order they were added.
+    pub fn low_rank(&self) -> &[LowRank] {
+        &self.low_rank[..self.low_rank_used]
+    }
+
+    /// The low-rank terms, mutably (e.g. to zero the entries of an eliminated unknown).
+    pub fn low_rank_mut(&mut self) -> &mut [LowRank] {
+        &mut self.low_rank[..self.low_rank_used]
     }
 
     /// Number of block rows.
@@ -132,7 +188,12 @@ impl BlockBanded {
     /// Whether every stored entry is finite.
     pub fn is_finite(&self) -> bool {
         let finite = |b: &Matrix3<Real>| b.iter().all(|x| x.is_finite());
-        self.blocks.iter().all(finite) && self.far.iter().all(|f| finite(&f.block))
+        self.blocks.iter().all(finite)
+            && self.far.iter().all(|f| finite(&f.block))
+            && self.low_rank().iter().all(|t| {
+                t.coefficient.is_finite()
+                    && t.vector.iter().all(|v| v.iter().all(|x| x.is_finite()))
+            })
     }
 
     /// Adds `b` at band position `(i, j)` and `bᵀ` at `(j, i)`; for `i == j`, `b` should
@@ -200,6 +261,9 @@ impl BlockBanded {
     pub fn scale(&mut self, c: Real) {
         self.blocks.iter_mut().for_each(|b| *b *= c);
         self.far.iter_mut().for_each(|f| f.block *= c);
+        self.low_rank_mut()
+            .iter_mut()
+            .for_each(|t| t.coefficient *= c);
     }
 
     /// Adds \\(c\, M \otimes I_3\\) for a scalar banded matrix `m` of the same size.
@@ -238,6 +302,12 @@ impl BlockBanded {
             y[f.row] += f.block * x[f.col];
             y[f.col] += f.block.tr_mul(&x[f.row]);
         }
+        for t in self.low_rank() {
+            let s: Real = t.vector.iter().zip(x).map(|(u, x)| u.dot(x)).sum();
+            y.iter_mut()
+                .zip(&t.vector)
+                .for_each(|(y, u)| *y += u * (t.coefficient * s));
+        }
     }
 
     /// The full matrix as a dense `3n × 3n` array (tests and small analyses only).
@@ -254,6 +324,13 @@ impl BlockBanded {
             upper += f.block;
             let mut lower = a.fixed_view_mut::<3, 3>(3 * f.col, 3 * f.row);
             lower += f.block.transpose();
+        }
+        for t in self.low_rank() {
+            let u = nalgebra::DVector::from_iterator(
+                3 * self.n,
+                t.vector.iter().flat_map(|v| v.iter().copied()),
+            );
+            a += &u * u.transpose() * t.coefficient;
         }
         a
     }

@@ -229,7 +229,7 @@ fn gradient_error(energy: &dyn Energy, rod: &Rod) -> Real {
 }
 
 fn hessian_of(energy: &dyn Energy, rod: &Rod, kind: HessianKind) -> nalgebra::DMatrix<Real> {
-    let mut h = BlockBanded::zeros(rod.len(), rod.basis().degree());
+    let mut h = BlockBanded::zeros(rod.len(), energy.bandwidth(rod));
     energy.add_hessian(rod, kind, &mut h);
     h.to_dense()
 }

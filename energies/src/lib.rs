@@ -40,6 +40,7 @@ mod gravity;
 mod point_force;
 mod point_spring;
 mod stretching;
+mod twisting;
 
 pub use bending::{Bending, STRETCH_FLOOR};
 pub use clamp::Clamp;
@@ -49,3 +50,4 @@ pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use point_spring::PointSpring;
 pub use stretching::{Multipliers, StretchFormulation, Stretching};
+pub use twisting::{Frame, Twisting};

@@ -35,6 +35,7 @@ mod implicit_euler;
 mod incremental;
 mod kkt;
 pub mod linear;
+mod low_rank;
 mod midpoint;
 pub mod modal;
 pub mod newton;

@@ -228,6 +228,8 @@ pub struct LinearSolver {
     active: Option<LinearSolverKind>,
     /// Whether the last factorisation was [`factor_indefinite`](Self::factor_indefinite).
     indefinite: bool,
+    /// The matrix's low-rank terms, applied after each solve.
+    low_rank: crate::low_rank::LowRankCorrections,
 }
 
 impl LinearSolver {
@@ -250,10 +252,24 @@ impl LinearSolver {
         };
         self.active = Some(kind);
         self.indefinite = false;
-        match kind {
+        self.low_rank.clear();
+        let result = match kind {
             LinearSolverKind::Banded => self.banded.factor(a),
             LinearSolverKind::Sparse => self.sparse.factor(a, epoch).map(|_| ()),
+        };
+        result.and_then(|_| self.prepare_low_rank(a))
+    }
+
+    /// Prepares the Sherman–Morrison corrections of `a`'s low-rank terms with the band's
+    /// factorisation just computed.
+    fn prepare_low_rank(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+        let mut corrections = std::mem::take(&mut self.low_rank);
+        let result = corrections.prepare(a, |x| self.solve_band(x));
+        self.low_rank = corrections;
+        if result.is_err() {
+            self.active = None;
         }
+        result
     }
 
     /// Factorises a symmetric, possibly indefinite, banded `a` by the block
@@ -261,10 +277,11 @@ impl LinearSolver {
     /// singular pivot.
     pub fn factor_indefinite(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
         self.active = None;
+        self.low_rank.clear();
         self.ldlt.factor(a)?;
         self.active = Some(LinearSolverKind::Banded);
         self.indefinite = true;
-        Ok(())
+        self.prepare_low_rank(a)
     }
 
     /// A direction of negative curvature of the matrix last given to
@@ -281,7 +298,16 @@ impl LinearSolver {
 
     /// Solves in place for right-hand sides stored column after column, with the
     /// factorisation of the last [`factor`](Self::factor) call (an error if it failed).
+    /// Low-rank terms of the matrix (see [`BlockBanded::add_low_rank`]) are applied by
+    /// the Sherman–Morrison formula.
     pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
+        self.solve_band(rhs)?;
+        self.low_rank.apply(rhs);
+        Ok(())
+    }
+
+    /// Solves with the factorised band and far blocks only.
+    fn solve_band(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
         if self.is_indefinite() {
             return self.ldlt.solve_in_place(rhs);
         }

@@ -11,7 +11,9 @@
 //! zeroed in place (so the sparsity pattern, and with it the symbolic analysis, is
 //! unchanged) and moved to the right-hand side as \\(-A_{jk}\delta_k\\). The pin's
 //! multiplier follows from the original row `k`: \\(\mu = (A \Delta x)_k - b_k -
-//! (G^T\mu)_k\\) with the other pins' multipliers.
+//! (G^T\mu)_k\\) with the other pins' multipliers. Low-rank terms \\(c\,u u^T\\) alike:
+//! saved whole, their entries at eliminated points zeroed, and \\(c\, u\, (u_k \cdot
+//! \delta_k)\\) moved to the right-hand side.
 
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
@@ -27,6 +29,9 @@ pub(crate) struct PointPins {
     /// Far blocks touching an eliminated control point, before elimination:
     /// `(e, j, A_jk)` for eliminated pin `e` at control point `k` (duplicates kept: they sum).
     saved_far: Vec<(usize, usize, Matrix3<Real>)>,
+    /// Low-rank terms `(c, u)` before elimination; the first `low_rank_used` are live.
+    saved_low_rank: Vec<(Real, Vec<Vector3<Real>>)>,
+    low_rank_used: usize,
     /// Per eliminated pin: the right-hand side `b_k` before elimination.
     rhs: Vec<Vector3<Real>>,
     bandwidth: usize,
@@ -80,6 +85,7 @@ impl PointPins {
             }
         }
         self.save_far(a.far_blocks());
+        self.save_low_rank(a);
         for f in a.far_blocks_mut() {
             if self.holds(f.row) || self.holds(f.col) {
                 f.block = Matrix3::zeros();
@@ -95,6 +101,32 @@ impl PointPins {
                 a.set_block(j, k, &value);
             }
         }
+    }
+
+    /// Saves the low-rank terms and zeroes their entries at eliminated points.
+    fn save_low_rank(&mut self, a: &mut BlockBanded) {
+        self.low_rank_used = 0;
+        if self.pins.is_empty() {
+            return;
+        }
+        for term in a.low_rank_mut() {
+            if self.low_rank_used == self.saved_low_rank.len() {
+                self.saved_low_rank.push((0.0, Vec::new()));
+            }
+            let saved = &mut self.saved_low_rank[self.low_rank_used];
+            saved.0 = term.coefficient;
+            saved.1.clear();
+            saved.1.extend_from_slice(&term.vector);
+            self.low_rank_used += 1;
+            for &(_, k) in &self.pins {
+                term.vector[k] = Vector3::zeros();
+            }
+        }
+    }
+
+    /// The saved low-rank terms.
+    fn low_rank(&self) -> &[(Real, Vec<Vector3<Real>>)] {
+        &self.saved_low_rank[..self.low_rank_used]
     }
 
     /// Saves, per eliminated pin at `k`, the far blocks `A_jk` of column `k`.
@@ -135,6 +167,16 @@ impl PointPins {
             let (p, k) = self.pins[e];
             sub3(b, j, &(block * (targets[p] - x[k])));
         }
+        for (c, u) in self.low_rank() {
+            let s: Real = self
+                .pins
+                .iter()
+                .map(|&(p, k)| u[k].dot(&(targets[p] - x[k])))
+                .sum();
+            for (j, u) in u.iter().enumerate() {
+                sub3(b, j, &(u * (c * s)));
+            }
+        }
         for &(p, k) in &self.pins {
             let delta = targets[p] - x[k];
             b[3 * k..3 * k + 3].copy_from_slice(delta.as_slice());
@@ -159,6 +201,10 @@ impl PointPins {
             }
             for &(_, j, block) in self.saved_far.iter().filter(|s| s.0 == e) {
                 row += block.tr_mul(&flat3(dx, j));
+            }
+            for (c, u) in self.low_rank() {
+                let s: Real = (0..n).map(|j| u[j].dot(&flat3(dx, j))).sum();
+                row += u[k] * (c * s);
             }
             mu[p] = row;
         }
