@@ -25,6 +25,11 @@ use std::time::Instant;
 pub struct BenchResult {
     /// Median implicit Euler step, 16 control points, µs.
     pub step_us_16: Real,
+    /// Median implicit Euler step of a 16-point rod clamped at both ends with stretching
+    /// and bending, µs ([`crate::bench_twist`]).
+    pub step_us_16_bending: Real,
+    /// The same with the twisting energy, µs.
+    pub step_us_16_twist: Real,
     /// Median static Newton iteration, 16 control points, µs.
     pub static_newton_us_16: Real,
     /// Median step time per control point, ns, by size.
@@ -83,7 +88,12 @@ pub(crate) fn median(mut v: Vec<Real>) -> Real {
 
 /// Median wall time (s) of one step of an `n`-point stretched cable.
 fn step_seconds(n: usize, reps: usize) -> Result<Real, Error> {
-    let mut sim = Simulation::new(pinned_cable(n, 1.05, 100.0)?, one_iteration()?);
+    let sim = Simulation::new(pinned_cable(n, 1.05, 100.0)?, one_iteration()?);
+    median_step_seconds(sim, reps)
+}
+
+/// Median wall time (s) of one 1 ms step of `sim` over `reps` steps, after five.
+pub(crate) fn median_step_seconds(mut sim: Simulation, reps: usize) -> Result<Real, Error> {
     for _ in 0..5 {
         sim.step(1e-3)?;
     }
@@ -200,6 +210,8 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let scale = |full: usize, short: usize| if quick { short } else { full };
     let step_us_16 = step_seconds(16, scale(20_000, 2_000))? * 1e6;
     let static_newton_us_16 = static_newton_seconds(scale(200, 20))? * 1e6;
+    let step_us_16_bending = crate::bench_twist::step_seconds(false, scale(20_000, 2_000))? * 1e6;
+    let step_us_16_twist = crate::bench_twist::step_seconds(true, scale(20_000, 2_000))? * 1e6;
     let mut per_cp_ns = BTreeMap::new();
     let mut bytes_per_cp = 0.0;
     for (n, reps) in [
@@ -224,6 +236,8 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let hard_cases_total = crate::hard_cases::hard_cases()?.len();
     Ok(BenchResult {
         step_us_16,
+        step_us_16_bending,
+        step_us_16_twist,
         static_newton_us_16,
         per_cp_ns,
         per_cp_flatness: hi / lo,

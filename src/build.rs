@@ -8,8 +8,10 @@ use nalgebra::Vector3;
 use splinerod_adaptivity::{
     AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion, ToleranceCriterion,
 };
-use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
-use splinerod_energies::{Bending, Clamp, Gravity, StretchFormulation, Stretching};
+use splinerod_core::{BSplineSpace, BasisSpace, Keyframes, Material, Pin, Real, Rod};
+use splinerod_energies::{
+    Bending, Clamp, Frame, Gravity, StretchFormulation, Stretching, Twisting,
+};
 use splinerod_integrators::{
     Bdf2, ImplicitEuler, ImplicitMidpoint, Integrator, LinearSolverKind, NewtonParams,
     StaticParams, StaticSolver,
@@ -173,6 +175,9 @@ impl Scene {
             }
             system = system.with_pin(pin);
         }
+        if let Some(twisting) = self.twisting(&system.rod)? {
+            system = system.with_energy(twisting);
+        }
         for g in &self.grabs {
             let times = (g.start_time, g.end_time);
             let grab = Grab::new(g.at * l, Vector3::from(g.to), times, g.stiffness)?;
@@ -185,6 +190,27 @@ impl Scene {
             system = system.with_energy(contact);
         }
         Ok(system)
+    }
+
+    /// The twisting energy of `rod.twist_stiffness` between the end clamps, with their
+    /// `turn` schedules; the start frame's axis is the rod's tangent there as it starts.
+    fn twisting(&self, rod: &Rod) -> Result<Option<Twisting>, Error> {
+        let (Some(gj), [Some(first), Some(last)]) = (self.rod.twist_stiffness, self.twist_clamps())
+        else {
+            return Ok(None);
+        };
+        let frame = Frame::along(rod.tangent(0.0)?)?;
+        let schedule = |i: usize| -> Result<Option<Keyframes<Real>>, Error> {
+            let pin = &self.pins[i];
+            let field = format!("pins[{i}].turn");
+            pin.turn
+                .as_ref()
+                .map(|k| crate::path::schedule(k, pin.interpolation, &field))
+                .transpose()
+        };
+        let twisting =
+            Twisting::between_ends(gj, rod, frame)?.with_turns(schedule(first)?, schedule(last)?);
+        Ok(Some(twisting))
     }
 
     /// The adapt step of `[adaptivity]`, if enabled: the interaction criterion and either

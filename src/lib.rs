@@ -38,6 +38,7 @@ pub mod adaptive_study;
 pub mod bench;
 #[cfg(feature = "parallel")]
 pub mod bench_adapt;
+pub mod bench_twist;
 mod build;
 pub mod elastic_catenary;
 mod ensemble;
@@ -71,6 +72,8 @@ mod simulation;
 pub mod step_report;
 pub mod substep;
 mod system;
+mod twist_output;
+pub mod writhe;
 
 pub use ensemble::Ensemble;
 pub use error::Error;

@@ -13,7 +13,7 @@
 
 use crate::Error;
 use nalgebra::Vector3;
-use splinerod_core::Real;
+use splinerod_core::{Keyframes, Real};
 
 /// How a [`Path`] moves between keyframes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
@@ -26,13 +26,19 @@ pub enum Interpolation {
     Smooth,
 }
 
-/// Positions at increasing times (module docs).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Path {
-    times: Vec<Real>,
-    points: Vec<Vector3<Real>>,
-    interpolation: Interpolation,
+impl From<Interpolation> for splinerod_core::Interpolation {
+    fn from(i: Interpolation) -> Self {
+        match i {
+            Interpolation::Linear => Self::Linear,
+            Interpolation::Smooth => Self::Smooth,
+        }
+    }
 }
+
+/// Positions at increasing times (module docs): [`Keyframes`] of points, checked with
+/// errors naming the scene field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Path(Keyframes<Vector3<Real>>);
 
 impl Path {
     /// A path through `keyframes` `[t, x, y, z]`; `field` names them in errors: they
@@ -42,81 +48,69 @@ impl Path {
         interpolation: Interpolation,
         field: &str,
     ) -> Result<Self, Error> {
-        if keyframes.is_empty() {
-            return Err(Error::field(field, "[]", "needs at least one [t, x, y, z]"));
-        }
-        for (k, f) in keyframes.iter().enumerate() {
-            if !f.iter().all(|x| x.is_finite()) {
-                return Err(Error::field(
-                    format!("{field}[{k}]"),
-                    format!("{f:?}"),
-                    "must be finite",
-                ));
-            }
-            if k > 0 && f[0] <= keyframes[k - 1][0] {
-                let reason = format!(
-                    "times must increase (the one before is {})",
-                    keyframes[k - 1][0]
-                );
-                return Err(Error::field(
-                    format!("{field}[{k}]"),
-                    format!("{f:?}"),
-                    reason,
-                ));
-            }
-        }
-        Ok(Self {
-            times: keyframes.iter().map(|f| f[0]).collect(),
-            points: keyframes
-                .iter()
-                .map(|f| Vector3::new(f[1], f[2], f[3]))
-                .collect(),
-            interpolation,
-        })
+        check_keyframes(keyframes, field)?;
+        let frames = keyframes
+            .iter()
+            .map(|f| (f[0], Vector3::new(f[1], f[2], f[3])));
+        Ok(Self(Keyframes::new(frames, interpolation.into())?))
     }
 
     /// The first keyframe's time and position.
     pub fn start(&self) -> (Real, Vector3<Real>) {
-        (self.times[0], self.points[0])
+        self.0.start()
     }
 
     /// The last keyframe's time.
     pub fn end_time(&self) -> Real {
-        self.times[self.times.len() - 1]
+        self.0.end_time()
     }
 
     /// The position at time `t`.
     pub fn at(&self, t: Real) -> Vector3<Real> {
-        let (times, points) = (&self.times, &self.points);
-        let last = times.len() - 1;
-        if t <= times[0] {
-            return points[0];
-        }
-        if t >= times[last] {
-            return points[last];
-        }
-        let k = times.partition_point(|&tk| tk <= t) - 1;
-        let h = times[k + 1] - times[k];
-        let u = (t - times[k]) / h;
-        match self.interpolation {
-            Interpolation::Linear => points[k] + (points[k + 1] - points[k]) * u,
-            Interpolation::Smooth => {
-                let (v0, v1) = (self.velocity(k), self.velocity(k + 1));
-                let (u2, u3) = (u * u, u * u * u);
-                points[k] * (2.0 * u3 - 3.0 * u2 + 1.0)
-                    + v0 * (h * (u3 - 2.0 * u2 + u))
-                    + points[k + 1] * (-2.0 * u3 + 3.0 * u2)
-                    + v1 * (h * (u3 - u2))
-            }
-        }
+        self.0.at(t)
     }
+}
 
-    /// Catmull–Rom velocity at keyframe `k` (zero at the ends).
-    fn velocity(&self, k: usize) -> Vector3<Real> {
-        if k == 0 || k + 1 >= self.times.len() {
-            return Vector3::zeros();
-        }
-        let dt = self.times[k + 1] - self.times[k - 1];
-        (self.points[k + 1] - self.points[k - 1]) / dt
+/// Checks keyframes `[t, v…]` of a scene field: at least one, finite, strictly
+/// increasing times; errors name `field[k]`.
+pub fn check_keyframes<const N: usize>(keyframes: &[[Real; N]], field: &str) -> Result<(), Error> {
+    if keyframes.is_empty() {
+        return Err(Error::field(
+            field,
+            "[]",
+            "needs at least one keyframe [t, …]",
+        ));
     }
+    for (k, f) in keyframes.iter().enumerate() {
+        if !f.iter().all(|x| x.is_finite()) {
+            return Err(Error::field(
+                format!("{field}[{k}]"),
+                format!("{f:?}"),
+                "must be finite",
+            ));
+        }
+        if k > 0 && f[0] <= keyframes[k - 1][0] {
+            let reason = format!(
+                "times must increase (the one before is {})",
+                keyframes[k - 1][0]
+            );
+            return Err(Error::field(
+                format!("{field}[{k}]"),
+                format!("{f:?}"),
+                reason,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The schedule through `keyframes` `[t, value]` (checked: see [`check_keyframes`]).
+pub fn schedule(
+    keyframes: &[[Real; 2]],
+    interpolation: Interpolation,
+    field: &str,
+) -> Result<Keyframes<Real>, Error> {
+    check_keyframes(keyframes, field)?;
+    let frames = keyframes.iter().map(|f| (f[0], f[1]));
+    Keyframes::new(frames, interpolation.into()).map_err(Error::from)
 }

@@ -169,15 +169,23 @@ fn build_members(scene: &Scene) -> Result<Vec<(Scene, Simulation)>, Error> {
 }
 
 /// Prepares a member for its first stage: a static solve starts at the time the grabs,
-/// driven pins and keyframed loads reach their final targets, with every cut made; a dynamic one with the cuts due at
-/// time zero.
+/// driven pins, turning clamps and keyframed loads reach their final targets, with every
+/// cut made; a dynamic one with the cuts due at time zero.
 fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Result<(), Error> {
     if scene.solver.method == Method::Static {
         let grabs = scene.grabs.iter().map(|g| g.end_time);
         let paths = sim.system.drivers.iter().map(|d| d.path.end_time());
         let loads = sim.system.loads.iter().filter_map(|l| l.path.as_ref());
         let loads = loads.map(|p| p.end_time());
-        let t = grabs.chain(paths).chain(loads).fold(0.0, Real::max);
+        let turns = scene
+            .pins
+            .iter()
+            .filter_map(|p| p.turn.as_ref()?.last().map(|k| k[0]));
+        let t = grabs
+            .chain(paths)
+            .chain(loads)
+            .chain(turns)
+            .fold(0.0, Real::max);
         (sim.time, sim.system.time) = (t, t);
         cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))
     } else {

@@ -137,6 +137,8 @@ impl AddAssign for SolverTotals {
     }
 }
 
+pub use crate::twist_output::TwistOutput;
+
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunResult {
@@ -160,6 +162,13 @@ pub struct RunResult {
     pub solver: SolverTotals,
     /// Forces the pins exert on the rod at the end, N (static solves only).
     pub pin_forces: Vec<[Real; 3]>,
+    /// Torques the pins exert on the rod about their clamp axes at the end, N·m, one per
+    /// pin (with `rod.twist_stiffness` only: the twisting moment at the end clamps).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pin_torques: Vec<[Real; 3]>,
+    /// The twist between the end clamps at the end (with `rod.twist_stiffness` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub twist: Option<TwistOutput>,
     /// Mechanically independent pieces at the end (1 + the number of cuts).
     pub pieces: usize,
     /// `[t, n]`: the initial number of control points and every change of it.
@@ -287,6 +296,8 @@ pub(crate) fn finish(
             .iter()
             .map(|f| (*f).into())
             .collect(),
+        pin_torques: crate::twist_output::pin_torques(scene, system)?,
+        twist: crate::twist_output::twist(system)?,
         pieces: rod.pieces(),
         control_points_history: tally.history,
         median_step_seconds: if statics { 0.0 } else { median(step_seconds) },

@@ -70,6 +70,9 @@ pub struct RodSpec {
     pub stretch_stiffness: f64,
     /// Bending stiffness `EI`, N·m² (> 0; needs degree ≥ 2). Default: no bending energy.
     pub bending_stiffness: Option<f64>,
+    /// Torsional stiffness `GJ`, N·m² (> 0; needs clamps at both ends and
+    /// `bending_stiffness`). Default: no twisting energy.
+    pub twist_stiffness: Option<f64>,
     /// Mass-proportional damping, 1/s (≥ 0). Default 0.
     #[serde(default)]
     pub damping: f64,

@@ -21,9 +21,12 @@ pub struct PinSpec {
     /// Keyframes `[t, x, y, z]` (s, m) the pin follows: the first at time 0 where the
     /// point starts, times increasing ([`crate::path`]).
     pub path: Option<Vec<[f64; 4]>>,
-    /// How the path moves between keyframes. Default linear.
+    /// How the path and the turn move between keyframes. Default linear.
     #[serde(default)]
     pub interpolation: Interpolation,
+    /// Keyframes `[t, angle]` (s, rad) of the clamp's turn about its axis (a clamp at an
+    /// end of a rod with `twist_stiffness`). Default: held still.
+    pub turn: Option<Vec<[f64; 2]>>,
 }
 
 /// `[world]`.
@@ -60,6 +63,16 @@ impl Scene {
                 let reason = "a clamp holds the tangent against bending: set rod.bending_stiffness";
                 return Err(Error::field(format!("pins[{i}].clamp"), true, reason));
             }
+            if let Some(keyframes) = &pin.turn {
+                let field = format!("pins[{i}].turn");
+                crate::path::schedule(keyframes, pin.interpolation, &field)?;
+                let end = pin.at == 0.0 || pin.at == 1.0;
+                if !(pin.clamp && end && self.rod.twist_stiffness.is_some()) {
+                    let reason = "only a clamp (clamp = true) at an end (at = 0 or 1) of a rod \
+                                  with rod.twist_stiffness can turn";
+                    return Err(Error::field(field, format!("{keyframes:?}"), reason));
+                }
+            }
             if let Some(keyframes) = &pin.path {
                 let field = format!("pins[{i}].path");
                 let path = Path::new(keyframes, pin.interpolation, &field)?;
@@ -69,6 +82,26 @@ impl Scene {
                 }
             }
         }
+        self.validate_twist()
+    }
+
+    /// `rod.twist_stiffness` needs bending and clamps at both ends.
+    fn validate_twist(&self) -> Result<(), Error> {
+        let Some(gj) = self.rod.twist_stiffness else {
+            return Ok(());
+        };
+        crate::scene::positive("rod.twist_stiffness", gj)?;
+        if self.twist_clamps().iter().any(Option::is_none) {
+            let reason = "twist needs clamps at both ends ([[pins]] at = 0 and at = 1 with \
+                          clamp = true): a rod with a free end carries no twist";
+            return Err(Error::field("rod.twist_stiffness", gj, reason));
+        }
         Ok(())
+    }
+
+    /// Indices of the clamped pins at the start and the end of the rod.
+    pub(crate) fn twist_clamps(&self) -> [Option<usize>; 2] {
+        let clamp_at = |at: f64| self.pins.iter().position(|p| p.clamp && p.at == at);
+        [clamp_at(0.0), clamp_at(1.0)]
     }
 }

@@ -249,7 +249,7 @@ impl Simulation {
         }
         if guard {
             let after = self.total_energy();
-            let work = 0.5 * (work_start + self.target_swap_energy_gap()) + self.pin_work();
+            let work = 0.5 * (work_start + self.target_swap_energy_gap(end - h)) + self.pin_work();
             let gain = after.0 - before.0 - work;
             let allowed =
                 ENERGY_GAIN * (before.1 + after.1) + 1e-12 * (before.0.abs() + after.0.abs());
@@ -262,9 +262,10 @@ impl Simulation {
 
     /// `E(q, p₁) − E(q, p₀)` at the rod's current positions `q`: the energy the grabs'
     /// targets add by moving from their start-of-step positions `p₀` (saved in
-    /// `substep.targets`) to their current ones `p₁`, and the loads' forces by changing
-    /// (`−(F₁ − F₀)·C(s)`). Zero without grabs or keyframed loads.
-    fn target_swap_energy_gap(&mut self) -> Real {
+    /// `substep.targets`) to their current ones `p₁`, the time-dependent energies (a
+    /// turning clamp) by going from `start` to the step's end, and the loads' forces by
+    /// changing (`−(F₁ − F₀)·C(s)`). Zero without grabs, such energies or keyframed loads.
+    fn target_swap_energy_gap(&mut self, start: Real) -> Real {
         use splinerod_integrators::System;
         let rod = &self.system.rod;
         let changed = self.system.loads.iter().zip(&self.substep.loads);
@@ -274,9 +275,11 @@ impl Simulation {
                 Err(_) => Real::NAN,
             })
             .sum();
-        if self.system.grabs.is_empty() {
+        let driven = self.system.energies.iter().any(|e| e.time_dependent());
+        if self.system.grabs.is_empty() && !driven {
             return loads;
         }
+        let end = self.system.time;
         let now = self.system.potential_energy();
         let swap = |grabs: &mut [crate::Grab], targets: &mut [Vector3<Real>]| {
             for (g, t) in grabs.iter_mut().zip(targets.iter_mut()) {
@@ -284,8 +287,10 @@ impl Simulation {
             }
         };
         swap(&mut self.system.grabs, &mut self.substep.targets);
+        self.system.energies.iter_mut().for_each(|e| e.drive(start));
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
+        self.system.energies.iter_mut().for_each(|e| e.drive(end));
         now - then + loads
     }
 

@@ -116,6 +116,9 @@ impl RodSystem {
                 load.force.force = path.at(t);
             }
         }
+        for energy in &mut self.energies {
+            energy.drive(t);
+        }
     }
 
     /// The springs of the grabs active at [`time`](Self::time).

@@ -199,3 +199,150 @@ fn a_rod_twisted_past_greenhill_buckles_and_below_it_straightens() {
     assert!(below < 1e-4, "{below}");
     assert!(above > 1e-3, "{above}");
 }
+
+/// A straight rod of `n` control points between clamps, the end clamp turned to `turn`
+/// over 0.5 s, `method` as given.
+fn torsion_scene(n: usize, turn: Real, method: &str) -> String {
+    format!(
+        "[rod]\nrest_length = 1.5\nlinear_density = 0.1\nstretch_stiffness = 1e4\n\
+         bending_stiffness = 0.3\ntwist_stiffness = 0.2\ncontrol_points = {n}\n\
+         start = [0.0, 0.0, 0.0]\nend = [0.0, 0.0, 1.5]\n\n\
+         [[pins]]\nat = 0.0\nclamp = true\n\n\
+         [[pins]]\nat = 1.0\nclamp = true\nturn = [[0.0, 0.0], [0.5, {turn:?}]]\ninterpolation = \"smooth\"\n\n\
+         [world]\ngravity = [0.0, 0.0, 0.0]\n\n\
+         [solver]\nmethod = \"{method}\"\ndt = 0.01\nduration = 0.6\n"
+    )
+}
+
+#[test]
+fn uniform_torsion_gives_the_exact_torque_and_energy() {
+    let (gj, l) = (0.2, 1.5);
+    for method in ["static", "implicit-euler", "implicit-midpoint", "bdf2"] {
+        for (n, turn) in [(8, 1.0), (13, -4.0)] {
+            let scene = Scene::from_toml(&torsion_scene(n, turn, method)).expect("scene");
+            let result = splinerod::runner::run(&scene).expect("run");
+            let (moment, energy) = (gj * turn / l, gj * turn * turn / (2.0 * l));
+            let torques = &result.pin_torques;
+            let twist = result.twist.expect("twist");
+            let e = result.energy["twist"];
+            println!(
+                "{method:>17}, n = {n:>2}, Φ = {turn:>4}: torque {:.12} (exact {moment:.12}), energy {e:.12} ({energy:.12})",
+                torques[1][2]
+            );
+            assert!((twist.turn - turn).abs() < 1e-12);
+            assert!(
+                (torques[1][2] - moment).abs() <= 1e-9 * moment.abs(),
+                "{method}"
+            );
+            assert!(
+                (torques[0][2] + moment).abs() <= 1e-9 * moment.abs(),
+                "{method}"
+            );
+            assert!((e - energy).abs() <= 1e-9 * energy, "{method}");
+        }
+    }
+}
+
+#[test]
+fn bad_twist_input_names_the_field() {
+    let cases = [
+        (
+            "twist_stiffness = 0.2",
+            "twist_stiffness = -1.0",
+            "rod.twist_stiffness",
+        ),
+        (
+            "twist_stiffness = 0.2",
+            "twist_stiffness = nan",
+            "rod.twist_stiffness",
+        ),
+        (
+            "at = 1.0\nclamp = true\n",
+            "at = 1.0\n",
+            "rod.twist_stiffness",
+        ),
+        ("[0.5, 2.0]]", "[0.5, 2.0], [0.4, 1.0]]", "pins[1].turn[2]"),
+        ("[0.5, 2.0]]", "[0.5, inf]]", "pins[1].turn[1]"),
+    ];
+    for (from, to, field) in cases {
+        let text = torsion_scene(8, 2.0, "static").replace(from, to);
+        assert_ne!(text, torsion_scene(8, 2.0, "static"), "{to}");
+        let error = Scene::from_toml(&text)
+            .and_then(|s| splinerod::runner::run(&s))
+            .expect_err(to)
+            .to_string();
+        assert!(error.contains(field), "{to}: {error}");
+    }
+    // A turn on a pin that is not a clamp at an end.
+    let text = torsion_scene(8, 2.0, "static") + "\n[[pins]]\nat = 0.5\nturn = [[0.0, 1.0]]\n";
+    let error = Scene::from_toml(&text).expect_err("turn").to_string();
+    assert!(error.contains("pins[2].turn"), "{error}");
+}
+
+/// Largest sideways distance of the probed midpoint from the x axis over `[t0, t1]`.
+fn probe_deflection(result: &splinerod::RunResult, t0: Real, t1: Real) -> Real {
+    let probe = &result.probes[0];
+    probe
+        .t
+        .iter()
+        .zip(&probe.positions)
+        .filter(|(t, _)| **t >= t0 && **t <= t1)
+        .map(|(_, p)| p[1].hypot(p[2]))
+        .fold(0.0, Real::max)
+}
+
+#[test]
+fn the_twist_buckling_scene_buckles_where_greenhill_says() {
+    let scene = Scene::load("scenes/twist_buckling.toml").expect("scene");
+    let result = splinerod::runner::run(&scene).expect("run");
+    // Critical turn at τ = 5: 9.718 EI/GJ = 12.6 rad, reached at t = 6.3 s.
+    let critical = greenhill(5.0) * 0.01 / 0.0077;
+    let crossing = critical / 2.0;
+    let before = probe_deflection(&result, 3.0, crossing - 0.5);
+    let after = probe_deflection(&result, 9.0, 11.0);
+    let twist = result.twist.expect("twist");
+    println!(
+        "critical turn {critical:.3} rad (t = {crossing:.2} s): deflection {before:.1e} m before, \
+         {after:.1e} m after; Tw = {:.4} rad, Wr = {:.4}, Lk = {:.6} turns for {:.6} imposed",
+        twist.twist,
+        twist.writhe,
+        twist.link,
+        twist.turn / (2.0 * std::f64::consts::PI)
+    );
+    assert!(before < 1e-4, "{before}");
+    assert!(after > 1e-2, "{after}");
+    let turns = twist.turn / (2.0 * std::f64::consts::PI);
+    assert!(
+        (twist.link - turns).abs() < 1e-3,
+        "{} vs {turns}",
+        twist.link
+    );
+}
+
+#[test]
+fn the_plectoneme_trades_twist_for_writhe_without_passing_through_itself() {
+    let scene = Scene::load("scenes/plectoneme.toml").expect("scene");
+    let result = splinerod::runner::run(&scene).expect("run");
+    let twist = result.twist.expect("twist");
+    let clearance = result
+        .contact
+        .and_then(|c| c.min_clearance_ratio)
+        .expect("the rod touches itself");
+    let turns = twist.turn / (2.0 * std::f64::consts::PI);
+    println!(
+        "Tw = {:.4} rad ({:.4} turns), Wr = {:.4} turns, Lk = {:.6} for {turns:.6} imposed; \
+         min clearance {:.4}",
+        twist.twist,
+        twist.twist / (2.0 * std::f64::consts::PI),
+        twist.writhe,
+        twist.link,
+        clearance
+    );
+    assert!(clearance >= 0.95, "{clearance}");
+    assert!(twist.writhe > 1.0, "writhe {}", twist.writhe);
+    assert!(
+        (twist.link - turns).abs() < 1e-3,
+        "{} vs {turns}",
+        twist.link
+    );
+}

@@ -81,15 +81,10 @@ impl Bending {
     /// Error unless `rod`'s degree is at least 2 (a degree-1 rod's curvature is a sum of
     /// Dirac masses at the knots, not square-integrable).
     pub fn check(&self, rod: &Rod) -> Result<(), CoreError> {
-        let degree = rod.basis().degree();
-        if degree >= 2 {
-            return Ok(());
-        }
-        Err(CoreError::InvalidParameter {
-            name: "degree",
-            value: degree as Real,
-            reason: "bending needs degree >= 2: the curvature of a degree-1 spline is not square-integrable",
-        })
+        degree_at_least_two(
+            rod,
+            "bending needs degree >= 2: the curvature of a degree-1 spline is not square-integrable",
+        )
     }
 
     /// Squared curvature \\(\kappa^2\\) (guarded) of the rod at material point `s`.
@@ -123,6 +118,19 @@ impl Bending {
             }
         }
     }
+}
+
+/// Error `reason` (naming `degree`) unless `rod`'s degree is at least 2.
+pub(crate) fn degree_at_least_two(rod: &Rod, reason: &'static str) -> Result<(), CoreError> {
+    let degree = rod.basis().degree();
+    if degree >= 2 {
+        return Ok(());
+    }
+    Err(CoreError::InvalidParameter {
+        name: "degree",
+        value: degree as Real,
+        reason,
+    })
 }
 
 /// \\(C'\\) and \\(C''\\) at a quadrature point.

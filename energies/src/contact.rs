@@ -390,6 +390,7 @@ impl Energy for Contact {
     fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
         Ok(EnergySummary {
             contact: Some(Contact::summary(self, rod)?),
+            ..EnergySummary::default()
         })
     }
 

@@ -11,6 +11,25 @@ use crate::ContactSummary;
 pub struct EnergySummary {
     /// Contacts the energy sees (self-contact, a floor, obstacles).
     pub contact: Option<ContactSummary>,
+    /// The twist between two clamps ([`crate::Twisting`]).
+    pub twist: Option<TwistSummary>,
+}
+
+/// The twist state of a rod between two clamps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TwistSummary {
+    /// Total twist Tw of the material frame, rad.
+    pub twist: Real,
+    /// Turn Φ of the end clamp relative to the start clamp, rad.
+    pub turn: Real,
+    /// Twisting moment \\(GJ\,\mathrm{Tw}/L\\) the clamps hold, N·m.
+    pub moment: Real,
+    /// Unit clamp axes at the start and the end (the end clamp exerts `+moment` about its
+    /// axis on the rod, the start clamp `−moment` about its own).
+    pub axes: [[Real; 3]; 2],
+    /// The start clamp's director (the material frame at `s = 0` is this director and
+    /// `axis × director`, turned by the start clamp's turn, which is absorbed in `turn`).
+    pub start_director: [Real; 3],
 }
 
 impl EnergySummary {
@@ -21,6 +40,9 @@ impl EnergySummary {
                 Some(a) => a.merged(&b),
                 None => b,
             });
+        }
+        if other.twist.is_some() {
+            self.twist = other.twist;
         }
     }
 }
@@ -119,6 +141,19 @@ pub trait Energy: Send + Sync {
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
         let _ = (rod, dt);
         Ok(())
+    }
+
+    /// Called in the drivers stage of every step (sub-step) with the time `t` the step
+    /// ends at (a static solve: its end time): time-dependent energies — a turning
+    /// clamp, a moving obstacle — set their state for `t` here. Default: nothing.
+    fn drive(&mut self, t: Real) {
+        let _ = t;
+    }
+
+    /// Whether [`drive`](Energy::drive) changes this energy (energy-conserving
+    /// integrators then count the work it does). Default false.
+    fn time_dependent(&self) -> bool {
+        false
     }
 
     /// Appends the material coordinates (m) where this energy acts locally now (both

@@ -40,14 +40,15 @@ mod gravity;
 mod point_force;
 mod point_spring;
 mod stretching;
-mod twisting;
+pub mod twisting;
 
 pub use bending::{Bending, STRETCH_FLOOR};
 pub use clamp::Clamp;
 pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
-pub use energy::{finite_difference_hessian, Energy, EnergySummary};
+pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary};
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use point_spring::PointSpring;
 pub use stretching::{Multipliers, StretchFormulation, Stretching};
+pub use twisting::holonomy::transport as parallel_transport;
 pub use twisting::{Frame, Twisting};

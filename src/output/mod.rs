@@ -6,5 +6,6 @@ pub mod camera;
 pub mod picture;
 pub mod plot;
 pub mod progress;
+pub mod ribbon;
 pub mod stats;
 pub mod vtk;

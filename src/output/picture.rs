@@ -6,7 +6,8 @@
 //! orange so the knots are visible (as in Lenoir et al.'s fig. 4), optionally the
 //! control polygon and control points (thin, grey), the pins (black squares), the
 //! active grabs (red dot at the grabbed material point, red cross at the spring's
-//! target), and a caption with time, step, control points and scale.
+//! target), on a rod with twist the material frame as a dark stripe winding around the
+//! centreline ([`super::ribbon`]), and a caption with time, step, control points and scale.
 //!
 //! # Camera
 //! A [`Camera`] is an orthographic projection (`xy`, `xz`, `yz`) or an `oblique` view
@@ -44,6 +45,11 @@ const SPAN_COLOURS: [RGBColor; 2] = [RGBColor(31, 119, 180), RGBColor(255, 127, 
 const GREY: RGBColor = RGBColor(150, 150, 150);
 /// Grabs.
 const RED: RGBColor = RGBColor(214, 39, 40);
+/// The material frame's stripe (rods with twist), its offset from the centreline (px)
+/// and its samples.
+const STRIPE: RGBColor = RGBColor(30, 30, 30);
+const STRIPE_OFFSET: Real = 4.0;
+const STRIPE_SAMPLES: usize = 600;
 
 /// A polyline of one colour and width.
 struct Stroke {
@@ -135,8 +141,20 @@ fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error
         view.camera.name(),
         view.metres_per_pixel() * 1e3,
     );
+    let mut strokes = strokes(rod, view)?;
+    if let Some(twist) = system.summary()?.twist {
+        // The material frame: a dark stripe STRIPE_OFFSET px off the centreline.
+        let offset = STRIPE_OFFSET * view.metres_per_pixel();
+        let points = super::ribbon::stripe(rod, &twist, offset, STRIPE_SAMPLES)?;
+        strokes.push(Stroke {
+            points: points.iter().map(|p| view.px(p)).collect(),
+            colour: STRIPE,
+            width: 2,
+            farness: 0.0,
+        });
+    }
     Ok(Sketch {
-        strokes: strokes(rod, view)?,
+        strokes,
         polygon: match polygon {
             true => control_polygon(rod, view),
             false => Vec::new(),

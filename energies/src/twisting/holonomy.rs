@@ -29,49 +29,37 @@
 //! and \\(\partial h_k/\partial a_k = (K_y(T_{k-1}, T_k) + K_x(T_k, T_{k+1}))
 //! P_k/(2|a_k|^2) - (\kappa b_k + \kappa b_{k+1}) a_k^T/(2|a_k|^3)\\). Consecutive samples
 //! share a span or meet at a knot, so the Hessian stays in the band of the rod (one
-//! more at a kink, where the knot is not sampled: see [`required_bandwidth`]).
+//! more at a kink, where the knot is not sampled: see [`Samples::bandwidth`]).
 //!
-//! Everything is a walk over the samples with a window of three: O(n), no allocation.
+//! Everything is a pass over the samples: O(n), no allocation once sized.
 
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::basis::{spans, MAX_ORDER};
 use splinerod_core::{BasisValues, Real, Rod};
 
-/// One tangent sample: the non-zero first derivatives of the basis functions there
-/// (exact zeros trimmed), \\(a = C'(s)\\), its length and direction.
+/// The basis row of one tangent sample: the non-zero first derivatives of the basis
+/// functions there (exact zeros trimmed).
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Sample {
+pub(crate) struct Row {
     /// First control point of the row.
     pub first: usize,
     /// Number of entries in `d1`.
     pub len: usize,
     /// \\(b'_{first+k}(s)\\).
     pub d1: [Real; MAX_ORDER],
-    /// \\(a = C'(s)\\).
-    pub a: Vector3<Real>,
-    /// \\(|a|\\).
-    pub norm: Real,
-    /// \\(T = a/|a|\\).
-    pub t: Vector3<Real>,
 }
 
-impl Sample {
-    fn new(first: usize, d1: &[Real], positions: &[Vector3<Real>]) -> Self {
+impl Row {
+    fn new(first: usize, d1: &[Real]) -> Self {
         let lead = d1.iter().take_while(|v| **v == 0.0).count();
         let trail = d1[lead..].iter().rev().take_while(|v| **v == 0.0).count();
         let len = d1.len() - lead - trail;
         let mut row = [0.0; MAX_ORDER];
         row[..len].copy_from_slice(&d1[lead..lead + len]);
-        let first = first + lead;
-        let a = (0..len).fold(Vector3::zeros(), |a, k| a + positions[first + k] * row[k]);
-        let norm = a.norm();
         Self {
-            first,
+            first: first + lead,
             len,
             d1: row,
-            a,
-            norm,
-            t: a / norm,
         }
     }
 
@@ -81,75 +69,113 @@ impl Sample {
     }
 }
 
+/// The tangent samples of a rod: their rows (rebuilt when the rod's topology epoch
+/// changes) and, for the current positions, \\(a_k = C'(s_k)\\), \\(|a_k|\\) and
+/// \\(T_k\\). Reused across calls: no allocation unless the knots changed.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Samples {
+    epoch: Option<u64>,
+    /// Basis rows, in order of `s`.
+    pub rows: Vec<Row>,
+    /// Block bandwidth the rows need (see [`Samples::bandwidth`]).
+    bandwidth: usize,
+    /// \\(a_k\\).
+    pub a: Vec<Vector3<Real>>,
+    /// \\(|a_k|\\).
+    pub norm: Vec<Real>,
+    /// \\(T_k = a_k / |a_k|\\).
+    pub t: Vec<Vector3<Real>>,
+    /// The two polygons, as sample indices: [`FINE`] (every sample) and [`COARSE`]
+    /// (the knots and the domain ends).
+    pub polygons: [Vec<usize>; 2],
+}
+
+/// Index of the fine polygon (knots and span midpoints).
+pub(crate) const FINE: usize = 0;
+/// Index of the coarse polygon (knots only).
+pub(crate) const COARSE: usize = 1;
+/// Richardson weights of the two polygons' holonomies: \\((4\psi_f - \psi_c)/3\\)
+/// cancels their O(h²) sampling error.
+pub(crate) const WEIGHTS: [Real; 2] = [4.0 / 3.0, -1.0 / 3.0];
+
+impl Samples {
+    /// Rows for `rod`'s basis (rebuilt if its topology epoch changed) and the tangents
+    /// at its current positions.
+    pub fn prepare(&mut self, rod: &Rod) {
+        self.prepare_rows(rod);
+        let positions = &rod.positions;
+        self.a.clear();
+        self.a.extend(self.rows.iter().map(|r| {
+            (0..r.len).fold(Vector3::zeros(), |a, k| {
+                a + positions[r.first + k] * r.d1[k]
+            })
+        }));
+        self.norm.clear();
+        self.norm.extend(self.a.iter().map(|a| a.norm()));
+        self.t.clear();
+        self.t
+            .extend(self.a.iter().zip(&self.norm).map(|(a, n)| a / *n));
+    }
+
+    /// The block bandwidth the holonomy's Hessian needs on `rod`: the largest distance
+    /// between control points of consecutive samples (the degree, or more across an
+    /// unsampled kink).
+    pub fn bandwidth(&mut self, rod: &Rod) -> usize {
+        self.prepare_rows(rod);
+        self.bandwidth
+    }
+
+    fn prepare_rows(&mut self, rod: &Rod) {
+        if self.epoch == Some(rod.topology_epoch()) {
+            return;
+        }
+        self.rows.clear();
+        self.polygons.iter_mut().for_each(Vec::clear);
+        let basis = rod.basis();
+        let d = basis.degree();
+        let mut values = BasisValues::default();
+        let mut at = |s: Real, rows: &mut Vec<Row>| {
+            // Inside the domain by construction; a failure leaves an empty row (a zero
+            // tangent, which makes the energy NaN rather than misaligning the samples).
+            match basis.evaluate(s, &mut values) {
+                Ok(()) => rows.push(Row::new(values.first, &values.d1[..values.order])),
+                Err(_) => rows.push(Row::new(0, &[])),
+            }
+        };
+        let (start, end) = basis.domain();
+        let coarse = &mut self.polygons[COARSE];
+        coarse.push(self.rows.len());
+        at(start, &mut self.rows);
+        for span in spans(basis) {
+            // Every interior knot, by its right limit (where the tangent jumps, at a knot
+            // of multiplicity ≥ d, the geodesic from the left sample crosses the jump).
+            if span.start > start {
+                coarse.push(self.rows.len());
+                at(span.start, &mut self.rows);
+            }
+            at(0.5 * (span.start + span.end), &mut self.rows);
+        }
+        coarse.push(self.rows.len());
+        at(end, &mut self.rows);
+        self.polygons[FINE].extend(0..self.rows.len());
+        let rows = &self.rows;
+        self.bandwidth = self.polygons.iter().fold(d, |width, polygon| {
+            polygon.windows(2).fold(width, |width, pair| {
+                let (a, b) = (&rows[pair[0]], &rows[pair[1]]);
+                width.max(b.last().saturating_sub(a.first))
+            })
+        });
+        self.epoch = Some(rod.topology_epoch());
+    }
+}
+
 /// Whether the rod is cut somewhere (an interior knot of multiplicity above the degree:
 /// the pieces are separate, and a piece with a free end carries no twist).
 pub(crate) fn is_cut(rod: &Rod) -> bool {
     let basis = rod.basis();
-    let d = basis.degree();
-    interior_multiplicities(rod).any(|(_, m)| m > d)
-}
-
-/// Interior knot values with their multiplicities.
-fn interior_multiplicities(rod: &Rod) -> impl Iterator<Item = (Real, usize)> + '_ {
-    let basis = rod.basis();
     let (d, n) = (basis.degree(), basis.count());
     let knots = &basis.knots()[d + 1..n];
-    let mut i = 0;
-    std::iter::from_fn(move || {
-        let v = *knots.get(i)?;
-        let m = knots[i..].iter().take_while(|k| **k == v).count();
-        i += m;
-        Some((v, m))
-    })
-}
-
-/// Calls `f` on every tangent sample of `rod`, in order of `s`.
-pub(crate) fn for_each_sample(rod: &Rod, mut f: impl FnMut(&Sample)) {
-    let basis = rod.basis();
-    let d = basis.degree();
-    let positions = &rod.positions;
-    let mut values = BasisValues::default();
-    let mut at = |s: Real, f: &mut dyn FnMut(&Sample)| {
-        if basis.evaluate(s, &mut values).is_ok() {
-            f(&Sample::new(
-                values.first,
-                &values.d1[..values.order],
-                positions,
-            ));
-        }
-    };
-    let (start, end) = basis.domain();
-    at(start, &mut f);
-    let quadrature = rod.quadrature();
-    for span in spans(basis) {
-        if span.start > start && multiplicity(basis.knots(), span.start) < d {
-            at(span.start, &mut f);
-        }
-        for p in quadrature.points_in((span.start, span.end)) {
-            let qp = quadrature.point(p);
-            f(&Sample::new(qp.first, qp.d1, positions));
-        }
-    }
-    at(end, &mut f);
-}
-
-fn multiplicity(knots: &[Real], v: Real) -> usize {
-    knots.iter().filter(|k| **k == v).count()
-}
-
-/// The block bandwidth the holonomy's Hessian needs on `rod`: the largest distance
-/// between control points of consecutive samples (the degree, or one more across an
-/// unsampled kink).
-pub(crate) fn required_bandwidth(rod: &Rod) -> usize {
-    let mut width = rod.basis().degree();
-    let mut previous: Option<Sample> = None;
-    for_each_sample(rod, |s| {
-        if let Some(p) = &previous {
-            width = width.max(s.last().saturating_sub(p.first));
-        }
-        previous = Some(*s);
-    });
-    width
+    knots.windows(d + 1).any(|w| w[0] == w[d])
 }
 
 /// \\(K(x, y) = 2\, x \times y / (1 + x \cdot y)\\) (the discrete curvature binormal).
@@ -171,7 +197,7 @@ pub(crate) fn curvature_binormal_jacobians(
 
 /// Parallel transport of `v` from unit vector `a` to unit vector `b` (the rotation about
 /// \\(a \times b\\) taking `a` to `b`).
-pub(crate) fn transport(a: &Vector3<Real>, b: &Vector3<Real>, v: &Vector3<Real>) -> Vector3<Real> {
+pub fn transport(a: &Vector3<Real>, b: &Vector3<Real>, v: &Vector3<Real>) -> Vector3<Real> {
     let c = a.cross(b);
     let cos = a.dot(b);
     v * cos + c.cross(v) + c * (c.dot(v) / (1.0 + cos))

@@ -38,15 +38,18 @@
 //! `d + 1`, the twist is released and the energy is zero from then on. (Evaluated on a
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
-pub(crate) mod holonomy;
+pub mod holonomy;
+mod window;
 
-use crate::Energy;
+use crate::{Energy, EnergySummary, TwistSummary};
 use holonomy::{
-    curvature_binormal, curvature_binormal_jacobians, for_each_sample, is_cut, required_bandwidth,
-    signed_angle, transport, wrap, Sample,
+    curvature_binormal, curvature_binormal_jacobians, is_cut, signed_angle, transport, wrap,
+    Samples, COARSE, FINE, WEIGHTS,
 };
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, Keyframes, KnotMap, Real, Rod};
+use std::sync::{Mutex, MutexGuard};
+use window::Window;
 
 /// A clamp's frame: the tangent axis and a director across it (both unit).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,7 +100,7 @@ impl Frame {
 }
 
 /// Twisting energy with torsional stiffness `GJ` between two clamp frames.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct Twisting {
     /// Torsional stiffness `GJ`, N·m².
     pub stiffness: Real,
@@ -105,12 +108,34 @@ pub struct Twisting {
     pub turn: Real,
     start: Frame,
     end: Frame,
-    /// Holonomy of the untwisted state, ψ₀.
-    rest: Real,
-    /// The continuous value of ψ at the last step start (the branch ψ is unwrapped to).
-    branch: Real,
+    /// Holonomies of the two polygons in the untwisted state, ψ₀.
+    rest: [Real; 2],
+    /// The continuous values of the polygons' ψ at the last step start (the branches
+    /// they are unwrapped to).
+    branch: [Real; 2],
     /// Whether the rod was cut (the twist is released).
     released: bool,
+    /// Turn schedules of the start and end clamps about their axes (rad against s);
+    /// [`Energy::drive`] sets `turn` to their difference.
+    schedules: [Option<Keyframes<Real>>; 2],
+    /// The tangent samples (rows cached per basis, tangents per call).
+    samples: Mutex<Samples>,
+}
+
+impl Clone for Twisting {
+    fn clone(&self) -> Self {
+        Self {
+            stiffness: self.stiffness,
+            turn: self.turn,
+            start: self.start,
+            end: self.end,
+            rest: self.rest,
+            branch: self.branch,
+            released: self.released,
+            schedules: self.schedules.clone(),
+            samples: Mutex::default(),
+        }
+    }
 }
 
 impl Twisting {
@@ -118,16 +143,11 @@ impl Twisting {
     /// frame is `start` (its axis should be the rod's tangent at `s = 0`), the end frame
     /// its parallel transport along the rod. `GJ > 0`.
     pub fn between_ends(stiffness: Real, rod: &Rod, start: Frame) -> Result<Self, CoreError> {
-        splinerod_core::rod::positive("twist_stiffness", stiffness)?;
         check_degree(rod)?;
         let end_axis = rod.tangent(rod.material().rest_length)?;
-        let mut director = start.director;
-        let mut previous = start.axis;
-        for_each_sample(rod, |s| {
-            director = transport(&previous, &s.t, &director);
-            previous = s.t;
-        });
-        let director = transport(&previous, &end_axis, &director);
+        let mut samples = Samples::default();
+        samples.prepare(rod);
+        let director = transported(&samples, FINE, &start, &end_axis);
         let end = Frame::new(end_axis, director)?;
         Self::new(stiffness, rod, start, end)
     }
@@ -142,13 +162,30 @@ impl Twisting {
             turn: 0.0,
             start,
             end,
-            rest: 0.0,
-            branch: 0.0,
+            rest: [0.0; 2],
+            branch: [0.0; 2],
             released: false,
+            schedules: [None, None],
+            samples: Mutex::default(),
         };
-        twisting.rest = twisting.raw_holonomy(rod);
-        twisting.branch = twisting.rest;
+        let raw = {
+            let samples = twisting.prepared(rod);
+            [FINE, COARSE].map(|p| twisting.raw_holonomy(&samples, p))
+        };
+        (twisting.rest, twisting.branch) = (raw, raw);
         Ok(twisting)
+    }
+
+    /// These clamps turning about their axes on schedules (rad; `None`: held still):
+    /// [`Energy::drive`] sets [`turn`](Self::turn) to `end(t) − start(t)`.
+    pub fn with_turns(
+        mut self,
+        start: Option<Keyframes<Real>>,
+        end: Option<Keyframes<Real>>,
+    ) -> Self {
+        self.schedules = [start, end];
+        self.drive(0.0);
+        self
     }
 
     /// The clamp frames (start, end) when the turn is zero.
@@ -166,7 +203,7 @@ impl Twisting {
         if self.released {
             return 0.0;
         }
-        self.holonomy(rod) - self.rest + self.turn
+        self.twist_of(&self.prepared(rod))
     }
 
     /// The twisting moment \\(GJ\,\mathrm{Tw}/L\\) the clamps hold, N·m.
@@ -174,112 +211,123 @@ impl Twisting {
         self.stiffness * self.twist(rod) / rod.material().rest_length
     }
 
-    /// ψ in (−π, π].
-    fn raw_holonomy(&self, rod: &Rod) -> Real {
-        let mut director = self.start.director;
-        let mut previous = self.start.axis;
-        for_each_sample(rod, |s| {
-            director = transport(&previous, &s.t, &director);
-            previous = s.t;
-        });
-        let director = transport(&previous, &self.end.axis, &director);
+    /// The samples, prepared for `rod`.
+    fn prepared(&self, rod: &Rod) -> MutexGuard<'_, Samples> {
+        let mut samples = self.samples.lock().unwrap_or_else(|e| e.into_inner());
+        samples.prepare(rod);
+        samples
+    }
+
+    /// The polygons' holonomies, each continuous from its branch.
+    fn holonomies(&self, samples: &Samples) -> [Real; 2] {
+        [FINE, COARSE].map(|p| {
+            let raw = self.raw_holonomy(samples, p);
+            self.branch[p] + wrap(raw - self.branch[p])
+        })
+    }
+
+    fn twist_of(&self, samples: &Samples) -> Real {
+        let psi = self.holonomies(samples);
+        (0..2)
+            .map(|p| WEIGHTS[p] * (psi[p] - self.rest[p]))
+            .sum::<Real>()
+            + self.turn
+    }
+
+    /// ψ of polygon `p`, in (−π, π].
+    fn raw_holonomy(&self, samples: &Samples, p: usize) -> Real {
+        let director = transported(samples, p, &self.start, &self.end.axis);
         signed_angle(&director, &self.end.director, &self.end.axis)
     }
 
-    /// ψ, continuous from the last step start.
-    fn holonomy(&self, rod: &Rod) -> Real {
-        self.branch + wrap(self.raw_holonomy(rod) - self.branch)
+    /// The tangents before and after vertex `j` of polygon `p`.
+    fn neighbours(&self, samples: &Samples, p: usize, j: usize) -> (Vector3<Real>, Vector3<Real>) {
+        let (t, polygon) = (&samples.t, &samples.polygons[p]);
+        let previous = if j == 0 {
+            self.start.axis
+        } else {
+            t[polygon[j - 1]]
+        };
+        let next = polygon.get(j + 1).map_or(self.end.axis, |&k| t[k]);
+        (previous, next)
     }
 
-    /// Walks the samples with their neighbours' tangents: `f(T_{k−1}, sample k, next)`,
-    /// `next` the following sample or `None` for the end axis.
-    fn walk(&self, rod: &Rod, mut f: impl FnMut(&Vector3<Real>, &Sample, Option<&Sample>)) {
-        let mut previous = self.start.axis;
-        let mut current: Option<Sample> = None;
-        for_each_sample(rod, |s| {
-            if let Some(c) = &current {
-                f(&previous, c, Some(s));
-                previous = c.t;
+    /// Adds \\(c\,\nabla\psi\\) to `gradient` (ψ the weighted sum of the polygons').
+    fn add_holonomy_gradient(&self, samples: &Samples, c: Real, gradient: &mut [Vector3<Real>]) {
+        for (p, polygon) in samples.polygons.iter().enumerate() {
+            for (j, &k) in polygon.iter().enumerate() {
+                let (previous, next) = self.neighbours(samples, p, j);
+                let t = &samples.t[k];
+                let kb = curvature_binormal(&previous, t) + curvature_binormal(t, &next);
+                let h = kb * (0.5 * c * WEIGHTS[p] / samples.norm[k]);
+                let row = &samples.rows[k];
+                for i in 0..row.len {
+                    gradient[row.first + i] += h * row.d1[i];
+                }
             }
-            current = Some(*s);
-        });
-        if let Some(c) = &current {
-            f(&previous, c, None);
         }
-    }
-
-    /// \\(h_k = \partial\psi/\partial a_k\\) given the neighbours' tangents.
-    fn h(previous: &Vector3<Real>, s: &Sample, next: &Vector3<Real>) -> Vector3<Real> {
-        (curvature_binormal(previous, &s.t) + curvature_binormal(&s.t, next)) * (0.5 / s.norm)
-    }
-
-    /// Adds \\(c\,\nabla\psi\\) to `gradient`.
-    fn add_holonomy_gradient(&self, rod: &Rod, c: Real, gradient: &mut [Vector3<Real>]) {
-        self.walk(rod, |previous, s, next| {
-            let next_t = next.map_or(self.end.axis, |n| n.t);
-            let h = Self::h(previous, s, &next_t) * c;
-            for k in 0..s.len {
-                gradient[s.first + k] += h * s.d1[k];
-            }
-        });
     }
 
     /// Adds \\(c\,\nabla^2\psi\\) (band part) to `hessian`.
-    fn add_holonomy_hessian(&self, rod: &Rod, c: Real, hessian: &mut BlockBanded) {
-        self.walk(rod, |previous, s, next| {
-            let next_t = next.map_or(self.end.axis, |n| n.t);
-            let (_, ky_prev) = curvature_binormal_jacobians(previous, &s.t);
-            let (kx_next, ky_next) = curvature_binormal_jacobians(&s.t, &next_t);
-            let kb = curvature_binormal(previous, &s.t) + curvature_binormal(&s.t, &next_t);
-            let p = Matrix3::identity() - s.t * s.t.transpose();
-            let diagonal = (ky_prev + kx_next) * p * (0.5 / (s.norm * s.norm))
-                - kb * s.a.transpose() * (0.5 / s.norm.powi(3));
-            let diagonal = (diagonal + diagonal.transpose()) * (0.5 * c);
-            add_pair(hessian, s, None, &diagonal);
-            if let Some(n) = next {
-                let pn = Matrix3::identity() - n.t * n.t.transpose();
-                let off = ky_next * pn * (0.5 * c / (s.norm * n.norm));
-                add_pair(hessian, s, Some(n), &off);
+    fn add_holonomy_hessian(
+        &self,
+        samples: &Samples,
+        c: Real,
+        degree: usize,
+        hessian: &mut BlockBanded,
+    ) {
+        let mut window = Window::new(degree + 1);
+        for (p, polygon) in samples.polygons.iter().enumerate() {
+            let c = c * WEIGHTS[p];
+            for (j, &k) in polygon.iter().enumerate() {
+                let (previous, next) = self.neighbours(samples, p, j);
+                let (t, a, norm) = (&samples.t[k], &samples.a[k], samples.norm[k]);
+                let (_, ky_prev) = curvature_binormal_jacobians(&previous, t);
+                let (kx_next, ky_next) = curvature_binormal_jacobians(t, &next);
+                let kb = curvature_binormal(&previous, t) + curvature_binormal(t, &next);
+                let projector = Matrix3::identity() - t * t.transpose();
+                let diagonal = (ky_prev + kx_next) * projector * (0.5 / (norm * norm))
+                    - kb * a.transpose() * (0.5 / norm.powi(3));
+                let diagonal = (diagonal + diagonal.transpose()) * (0.5 * c);
+                let row = &samples.rows[k];
+                window.add(hessian, row, None, &diagonal);
+                if let Some(&n) = polygon.get(j + 1) {
+                    let tn = &samples.t[n];
+                    let pn = Matrix3::identity() - tn * tn.transpose();
+                    let off = ky_next * pn * (0.5 * c / (norm * samples.norm[n]));
+                    window.add(hessian, row, Some(&samples.rows[n]), &off);
+                }
             }
-        });
-    }
-}
-
-/// Adds \\(R_a^T H R_b + R_b^T H^T R_a\\) to `hessian` (just \\(R_a^T H R_a\\), `H`
-/// symmetric, if `b` is `None`), with \\(R\\) the samples' rows
-/// \\(a = \sum_i b_i'(s) q_i\\).
-fn add_pair(hessian: &mut BlockBanded, a: &Sample, b: Option<&Sample>, h: &Matrix3<Real>) {
-    let same = b.is_none();
-    let b = b.unwrap_or(a);
-    for i in 0..a.len {
-        let range = if same { i..a.len } else { 0..b.len };
-        for j in range {
-            let (row, col) = (a.first + i, b.first + j);
-            let w = a.d1[i] * b.d1[j];
-            if !same && row == col {
-                hessian.add_block(row, col, &((h + h.transpose()) * w));
-            } else {
-                hessian.add_block(row, col, &(h * w));
-            }
+            window.flush(hessian);
         }
     }
 }
 
-fn check_degree(rod: &Rod) -> Result<(), CoreError> {
-    let degree = rod.basis().degree();
-    if degree >= 2 {
-        return Ok(());
+/// The director `start.director` carried by parallel transport from `start.axis` along
+/// the samples to `axis`.
+fn transported(
+    samples: &Samples,
+    polygon: usize,
+    start: &Frame,
+    axis: &Vector3<Real>,
+) -> Vector3<Real> {
+    let mut director = start.director;
+    let mut previous = start.axis;
+    for &k in &samples.polygons[polygon] {
+        let t = &samples.t[k];
+        director = transport(&previous, t, &director);
+        previous = *t;
     }
-    Err(CoreError::InvalidParameter {
-        name: "degree",
-        value: degree as Real,
-        reason: "twisting needs degree >= 2 (a continuous tangent)",
-    })
+    transport(&previous, axis, &director)
+}
+
+fn check_degree(rod: &Rod) -> Result<(), CoreError> {
+    crate::bending::degree_at_least_two(rod, "twisting needs degree >= 2 (a continuous tangent)")
 }
 
 impl Energy for Twisting {
     fn name(&self) -> &str {
-        "twisting"
+        "twist"
     }
 
     fn energy(&self, rod: &Rod) -> Real {
@@ -288,43 +336,77 @@ impl Energy for Twisting {
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        if !self.released {
-            self.add_holonomy_gradient(rod, self.moment(rod), gradient);
+        if self.released {
+            return;
         }
+        let samples = self.prepared(rod);
+        let moment = self.stiffness * self.twist_of(&samples) / rod.material().rest_length;
+        self.add_holonomy_gradient(&samples, moment, gradient);
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
         if self.released {
             return;
         }
+        let samples = self.prepared(rod);
         let l = rod.material().rest_length;
         if kind == HessianKind::Exact {
-            self.add_holonomy_hessian(rod, self.moment(rod), hessian);
+            let moment = self.stiffness * self.twist_of(&samples) / l;
+            self.add_holonomy_hessian(&samples, moment, rod.basis().degree(), hessian);
         }
         hessian.add_low_rank_with(self.stiffness / l, |u| {
-            self.add_holonomy_gradient(rod, 1.0, u);
+            self.add_holonomy_gradient(&samples, 1.0, u);
         });
     }
 
     fn bandwidth(&self, rod: &Rod) -> usize {
         if self.released {
-            rod.basis().degree()
-        } else {
-            required_bandwidth(rod)
+            return rod.basis().degree();
         }
+        let mut samples = self.samples.lock().unwrap_or_else(|e| e.into_inner());
+        samples.bandwidth(rod)
     }
 
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = map;
         self.released |= is_cut(rod);
         if !self.released {
-            self.branch = self.holonomy(rod);
+            let branch = self.holonomies(&self.prepared(rod));
+            self.branch = branch;
         }
+    }
+
+    fn drive(&mut self, t: Real) {
+        let [start, end] = &self.schedules;
+        if start.is_some() || end.is_some() {
+            let angle = |s: &Option<Keyframes<Real>>| s.as_ref().map_or(0.0, |k| k.at(t));
+            self.turn = angle(end) - angle(start);
+        }
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.schedules.iter().any(Option::is_some)
+    }
+
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            twist: Some(TwistSummary {
+                twist: self.twist(rod),
+                turn: self.turn,
+                moment: self.moment(rod),
+                axes: [self.start.axis.into(), self.end.axis.into()],
+                start_director: self.start.director.into(),
+            }),
+            ..EnergySummary::default()
+        })
     }
 
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
         let _ = dt;
-        self.branch = self.holonomy(rod);
+        if !self.released {
+            let branch = self.holonomies(&self.prepared(rod));
+            self.branch = branch;
+        }
         Ok(())
     }
 }
