@@ -151,30 +151,7 @@ impl Scene {
         if g != Vector3::zeros() {
             system = system.with_energy(Gravity::new(g)?);
         }
-        for (i, spec) in self.pins.iter().enumerate() {
-            let pin = Pin::here(&system.rod, spec.at * l)?;
-            if let Some(p) = spec.position {
-                agrees(&format!("pins[{i}].position"), p, pin.position, l)?;
-            }
-            if let Some(keyframes) = &spec.path {
-                let field = format!("pins[{i}].path");
-                // Times and values were checked by `Scene::validate`.
-                let path = Path::new(keyframes, spec.interpolation, &field)?;
-                agrees(
-                    &format!("{field}[0]"),
-                    path.start().1.into(),
-                    pin.position,
-                    l,
-                )?;
-                system = system.with_driver(i, path);
-            }
-            if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {
-                let stiffness = Clamp::stiffness_for(ei, l);
-                let clamp = Clamp::here(&system.rod, spec.at * l, stiffness)?;
-                system = system.with_energy(clamp);
-            }
-            system = system.with_pin(pin);
-        }
+        system = self.add_pins(system)?;
         if let Some(twisting) = self.twisting(&system.rod)? {
             system = system.with_energy(twisting);
         }
@@ -188,6 +165,52 @@ impl Scene {
         }
         if let Some(contact) = self.contact()? {
             system = system.with_energy(contact);
+        }
+        Ok(system)
+    }
+
+    /// The `[[pins]]`, in order, then the exact clamps' tangent pins (after them, so a
+    /// scene pin's index is its place in the file): a clamp at an end of a rod with
+    /// clamped knots holds its tangent exactly (a pin on the next control point sliding
+    /// along the tangent, driven with the end), elsewhere by the penalty [`Clamp`].
+    fn add_pins(&self, mut system: RodSystem) -> Result<RodSystem, Error> {
+        let l = self.rod.rest_length;
+        let mut tangents = Vec::new();
+        for (i, spec) in self.pins.iter().enumerate() {
+            let mut pin = Pin::here(&system.rod, spec.at * l)?;
+            if let Some(p) = spec.position {
+                agrees(&format!("pins[{i}].position"), p, pin.position, l)?;
+            }
+            if let Some(axis) = spec.slides_along {
+                pin = pin.sliding(Vector3::from(axis))?;
+            }
+            let mut path = None;
+            if let Some(keyframes) = &spec.path {
+                let field = format!("pins[{i}].path");
+                // Times and values were checked by `Scene::validate`.
+                let p = Path::new(keyframes, spec.interpolation, &field)?;
+                agrees(&format!("{field}[0]"), p.start().1.into(), pin.position, l)?;
+                system = system.with_driver(i, p.clone());
+                path = Some(p);
+            }
+            if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {
+                match Pin::tangent_at(&system.rod, spec.at * l) {
+                    Ok(tangent) => tangents.push((tangent, path)),
+                    Err(_) => {
+                        let stiffness = Clamp::stiffness_for(ei, l);
+                        let clamp = Clamp::here(&system.rod, spec.at * l, stiffness)?;
+                        system = system.with_energy(clamp);
+                    }
+                }
+            }
+            system = system.with_pin(pin);
+        }
+        for (tangent, path) in tangents {
+            if let Some(path) = path {
+                let index = system.pins.len();
+                system = system.with_driver(index, path);
+            }
+            system = system.with_pin(tangent);
         }
         Ok(system)
     }

@@ -290,12 +290,7 @@ pub(crate) fn finish(
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
         solver: tally.solver,
-        pin_forces: sim
-            .integrator
-            .pin_forces()
-            .iter()
-            .map(|f| (*f).into())
-            .collect(),
+        pin_forces: scene_pin_forces(scene, sim),
         pin_torques: crate::twist_output::pin_torques(scene, system)?,
         twist: crate::twist_output::twist(system)?,
         pieces: rod.pieces(),
@@ -307,6 +302,27 @@ pub(crate) fn finish(
         stage_seconds: tally.stages,
         adaptivity: tally.estimates,
     })
+}
+
+/// One force per `[[pins]]` entry: an exact clamp's tangent pin (after them in the
+/// system) adds its force to its clamp's (the pair's net force; their moment is the
+/// clamp's bending moment).
+fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
+    let mut forces = sim.integrator.pin_forces();
+    let l = scene.rod.rest_length;
+    for i in scene.pins.len()..forces.len().min(sim.system.pins.len()) {
+        let pin = &sim.system.pins[i];
+        let clamp = scene
+            .pins
+            .iter()
+            .position(|p| p.clamp && p.at * l == pin.at);
+        if let (true, Some(j)) = (pin.tangent, clamp) {
+            let extra = forces[i];
+            forces[j] += extra;
+        }
+    }
+    forces.truncate(scene.pins.len());
+    forces.into_iter().map(Into::into).collect()
 }
 
 /// Median of `values` (0 if empty); reorders them.

@@ -24,6 +24,9 @@ pub struct PinSpec {
     /// How the path and the turn move between keyframes. Default linear.
     #[serde(default)]
     pub interpolation: Interpolation,
+    /// Axis `[ax, ay, az]` the pinned point slides along (held only across it; no
+    /// friction). Default: held in every direction.
+    pub slides_along: Option<[f64; 3]>,
     /// Keyframes `[t, angle]` (s, rad) of the clamp's turn about its axis (a clamp at an
     /// end of a rod with `twist_stiffness`). Default: held still.
     pub turn: Option<Vec<[f64; 2]>>,
@@ -58,6 +61,13 @@ impl Scene {
             fraction(&format!("pins[{i}].at"), pin.at)?;
             if let Some(p) = pin.position {
                 finite_vec(&format!("pins[{i}].position"), p)?;
+            }
+            if let Some(axis) = pin.slides_along {
+                let field = format!("pins[{i}].slides_along");
+                finite_vec(&field, axis)?;
+                if axis.iter().all(|a| *a == 0.0) {
+                    return Err(Error::field(field, format!("{axis:?}"), "must not be zero"));
+                }
             }
             if pin.clamp && self.rod.bending_stiffness.is_none() {
                 let reason = "a clamp holds the tangent against bending: set rod.bending_stiffness";

@@ -72,3 +72,20 @@ pub fn positive(name: &'static str, value: Real) -> Result<(), CoreError> {
 pub fn non_negative(name: &'static str, value: Real) -> Result<(), CoreError> {
     Requirement::NonNegative.require(name, value)
 }
+
+/// `v` normalised, or an error naming `name` if it is zero or not finite.
+pub fn unit(
+    name: &'static str,
+    v: nalgebra::Vector3<Real>,
+) -> Result<nalgebra::Vector3<Real>, CoreError> {
+    let norm = v.norm();
+    if norm.is_finite() && norm > 0.0 {
+        Ok(v / norm)
+    } else {
+        Err(CoreError::InvalidParameter {
+            name,
+            value: norm,
+            reason: "must be a finite, non-zero vector",
+        })
+    }
+}

@@ -41,17 +41,9 @@ impl Clamp {
     pub fn new(at: Real, direction: Vector3<Real>, stiffness: Real) -> Result<Self, CoreError> {
         splinerod_core::rod::positive("clamp_stiffness", stiffness)?;
         splinerod_core::rod::non_negative("clamp_at", at)?;
-        let norm = direction.norm();
-        if !(norm.is_finite() && norm > 0.0) {
-            return Err(CoreError::InvalidParameter {
-                name: "clamp_direction",
-                value: norm,
-                reason: "must be a finite, non-zero vector",
-            });
-        }
         Ok(Self {
             at,
-            direction: direction / norm,
+            direction: splinerod_core::check::unit("clamp_direction", direction)?,
             stiffness,
         })
     }

@@ -7,6 +7,9 @@
 //!
 //! is solved as \\(y = -A^{-1} r\\), \\(Y = A^{-1} G^T\\), \\(S = G Y\\) (3k × 3k for k pins),
 //! \\(\mu = S^{-1}(c - G x - G y)\\), \\(\Delta x = y + Y \mu\\): `3k + 1` back-substitutions.
+//! A pin sliding along an axis holds only the directions of its projector `P`: its rows
+//! are \\(P G_p\\), and `S` gains \\(I - P\\) on its block so that it stays definite (the
+//! multiplier's component along the axis is then zero).
 
 use crate::linear::LinearSolver;
 use crate::point_pins::PointPins;
@@ -18,6 +21,8 @@ use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
 #[derive(Debug, Default)]
 pub(crate) struct Constraints {
     rows: Vec<BasisValues>,
+    /// Per pin, the projector onto the directions it holds.
+    projectors: Vec<Matrix3<Real>>,
     /// Constraint right-hand sides `c`, one 3-vector per pin.
     pub targets: Vec<Vector3<Real>>,
     /// `Y = A⁻¹ Gᵀ`, 3k columns of length 3n, column-major.
@@ -39,12 +44,14 @@ impl Constraints {
     /// Evaluates the pins' rows on the rod's current basis.
     pub fn setup(&mut self, rod: &Rod, pins: &[Pin]) -> Result<(), IntegratorError> {
         self.rows.clear();
+        self.projectors.clear();
         for pin in pins {
             self.rows.push(pin.row(rod)?);
+            self.projectors.push(pin.projector());
         }
         self.targets.resize(pins.len(), Vector3::zeros());
         self.n = rod.len();
-        self.points.setup(&self.rows)?;
+        self.points.setup(&self.rows, &self.projectors)?;
         self.general.clear();
         self.general
             .extend((0..pins.len()).filter(|&p| !self.points.contains(p)));
@@ -67,6 +74,11 @@ impl Constraints {
         b.combine(&b.value, x)
     }
 
+    /// The held part of pin `p`'s violation, \\(P(c - G x)\\).
+    pub fn gap(&self, p: usize, x: &[Vector3<Real>]) -> Vector3<Real> {
+        self.projectors[p] * (self.targets[p] - self.apply_row(p, x))
+    }
+
     /// `out += scale · Gᵀ μ`.
     pub fn add_transpose(&self, mu: &[Vector3<Real>], scale: Real, out: &mut [Vector3<Real>]) {
         for (b, m) in self.rows.iter().zip(mu) {
@@ -83,11 +95,11 @@ impl Constraints {
         if rho == 0.0 {
             return;
         }
-        for b in &self.rows {
+        for (b, proj) in self.rows.iter().zip(&self.projectors) {
             for i in 0..b.order {
                 for j in i..b.order {
                     let w = rho * b.value[i] * b.value[j];
-                    a.add_coupling(b.first + i, b.first + j, &Matrix3::from_diagonal_element(w));
+                    a.add_coupling(b.first + i, b.first + j, &(proj * w));
                 }
             }
         }
@@ -99,7 +111,7 @@ impl Constraints {
             return;
         }
         for (p, b) in self.rows.iter().enumerate() {
-            let e = (self.targets[p] - self.apply_row(p, x)) * rho;
+            let e = self.projectors[p] * (self.targets[p] - self.apply_row(p, x)) * rho;
             for k in 0..b.order {
                 out[b.first + k] += e * b.value[k];
             }
@@ -115,11 +127,15 @@ impl Constraints {
         self.y.clear();
         self.y.resize(m * dofs, 0.0);
         for (g, &p) in self.general.iter().enumerate() {
-            let b = &self.rows[p];
+            let (b, proj) = (&self.rows[p], &self.projectors[p]);
             for a in 0..3 {
                 let col = &mut self.y[(3 * g + a) * dofs..(3 * g + a + 1) * dofs];
-                for k in (0..b.order).filter(|&k| !self.points.holds(b.first + k)) {
-                    col[3 * (b.first + k) + a] = b.value[k];
+                for k in 0..b.order {
+                    // At a point an eliminated pin holds, only its free directions remain.
+                    let free = self.points.free_directions(b.first + k);
+                    let column = free * proj.column(a) * b.value[k];
+                    col[3 * (b.first + k)..3 * (b.first + k) + 3]
+                        .copy_from_slice(column.as_slice());
                 }
             }
         }
@@ -131,15 +147,28 @@ impl Constraints {
                 self.schur[i * m + j] = self.row_dot(i, &self.y[j * dofs..(j + 1) * dofs]);
             }
         }
+        for (g, &p) in self.general.iter().enumerate() {
+            let free = Matrix3::identity() - self.projectors[p];
+            for a in 0..3 {
+                for c in 0..3 {
+                    self.schur[(3 * g + a) * m + 3 * g + c] += free[(a, c)];
+                }
+            }
+        }
         dense_cholesky(&mut self.schur, m).map_err(|_| IntegratorError::RedundantPins)
     }
 
-    /// Row `i` of the Schur pins' `G` (pin `general[i / 3]`, coordinate `i % 3`) dotted
+    /// Row `i` of the Schur pins' `PG` (pin `general[i / 3]`, coordinate `i % 3`) dotted
     /// with a flat vector.
     fn row_dot(&self, i: usize, flat: &[Real]) -> Real {
-        let (b, a) = (&self.rows[self.general[i / 3]], i % 3);
+        let p = self.general[i / 3];
+        let (b, proj, a) = (&self.rows[p], &self.projectors[p], i % 3);
         (0..b.order)
-            .map(|k| b.value[k] * flat[3 * (b.first + k) + a])
+            .map(|k| {
+                let at = 3 * (b.first + k);
+                let v = Vector3::new(flat[at], flat[at + 1], flat[at + 2]);
+                b.value[k] * proj.row(a).transpose().dot(&v)
+            })
             .sum()
     }
 
@@ -149,8 +178,8 @@ impl Constraints {
         let (m, dofs) = (3 * self.general.len(), 3 * self.n);
         self.sol.clear();
         for &p in &self.general {
-            let gx = self.apply_row(p, x);
-            self.sol.extend((0..3).map(|a| self.targets[p][a] - gx[a]));
+            let gap = self.projectors[p] * (self.targets[p] - self.apply_row(p, x));
+            self.sol.extend(gap.iter().copied());
         }
         for i in 0..m {
             self.sol[i] -= self.row_dot(i, flat);

@@ -2,6 +2,7 @@
 //! eigenproblem \\(K v = \omega^2 M v\\) on the subspace the pins leave free
 //! (\\(G v = 0\\)), with `K` the exact Hessian of the potential energy.
 //!
+//! Pins sliding along an axis hold only the directions across it.
 //! Dense (O(n³)): an analysis tool for rods of up to [`MAX_DOFS`] degrees of freedom,
 //! never part of a time step. Free directions are the null space `Z` of `G`; then
 //! \\(M_Z = Z^T M Z = L L^T\\) and the eigenvalues of \\(L^{-1} Z^T K Z L^{-T}\\) are \\(\omega^2\\).
@@ -89,10 +90,12 @@ fn free_directions(system: &dyn System) -> Result<DMatrix<Real>, IntegratorError
     }
     let mut g = DMatrix::zeros(3 * pins.len(), dofs);
     for (p, pin) in pins.iter().enumerate() {
-        let b = pin.row(rod)?;
+        let (b, proj) = (pin.row(rod)?, pin.projector());
         for k in 0..b.order {
             for a in 0..3 {
-                g[(3 * p + a, 3 * (b.first + k) + a)] = b.value[k];
+                for c in 0..3 {
+                    g[(3 * p + a, 3 * (b.first + k) + c)] = b.value[k] * proj[(a, c)];
+                }
             }
         }
     }
@@ -102,7 +105,8 @@ fn free_directions(system: &dyn System) -> Result<DMatrix<Real>, IntegratorError
     let free: Vec<usize> = (0..dofs)
         .filter(|&j| eig.eigenvalues[j] <= 1e-10 * scale)
         .collect();
-    if free.len() + 3 * pins.len() != dofs {
+    let held: usize = pins.iter().map(|p| p.rank()).sum();
+    if free.len() + held != dofs {
         return Err(IntegratorError::RedundantPins);
     }
     Ok(DMatrix::from_fn(dofs, free.len(), |i, j| {

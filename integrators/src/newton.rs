@@ -376,7 +376,7 @@ fn line_search(
 ) -> Result<Real, IntegratorError> {
     let feasible = (0..ws.constraints.len()).all(|p| {
         let c = ws.constraints.targets[p];
-        (ws.constraints.apply_row(p, x) - c).amax() <= 1e-10 * (1.0 + c.amax())
+        ws.constraints.gap(p, x).amax() <= 1e-10 * (1.0 + c.amax())
     });
     let search = enabled && feasible && slope < 0.0;
     let phi0 = if search { problem.merit(system) } else { 0.0 };

@@ -6,7 +6,12 @@
 //! \\[ A_{jk} \to 0,\ A_{kj} \to 0\ (j \ne k), \quad A_{kk} \to I, \quad
 //! b_j \to b_j - A_{jk}\delta_k, \quad b_k \to \delta_k, \\]
 //!
-//! which keeps `A` symmetric positive definite and within its band. Far blocks
+//! which keeps `A` symmetric positive definite and within its band. A pin sliding along
+//! an axis holds only the directions of its projector `P` (and leaves `Q = I − P`
+//! free): then \\(\Delta x_k = Q\Delta x_k + P\delta_k\\), so
+//! \\(A_{jk} \to A_{jk} Q\\), \\(A_{kk} \to Q A_{kk} Q + P\\),
+//! \\(b_j \to b_j - A_{jk} P\delta_k\\), \\(b_k \to Q b_k + P\delta_k\\) (the full
+//! pin is `P = I`), and its multiplier is the `P` part of the row's residual. Far blocks
 //! (self-contact couplings `A_jk` with `|j − k|` beyond the band) are treated alike: saved,
 //! zeroed in place (so the sparsity pattern, and with it the symbolic analysis, is
 //! unchanged) and moved to the right-hand side as \\(-A_{jk}\delta_k\\). The pin's
@@ -24,6 +29,8 @@ use splinerod_core::{BasisValues, BlockBanded, FarBlock, Real};
 pub(crate) struct PointPins {
     /// `(pin index, control point)` of each eliminated pin.
     pins: Vec<(usize, usize)>,
+    /// The projector `P` onto the directions each eliminated pin holds.
+    projectors: Vec<Matrix3<Real>>,
     /// Per eliminated pin: blocks \\(A_{jk}\\) for `j = k - bw ..= k + bw` before elimination.
     saved: Vec<Matrix3<Real>>,
     /// Far blocks touching an eliminated control point, before elimination:
@@ -47,15 +54,22 @@ fn single_point(row: &BasisValues) -> Option<usize> {
 }
 
 impl PointPins {
-    /// Finds the pins to eliminate among `rows`; two pins on one control point conflict.
-    pub fn setup(&mut self, rows: &[BasisValues]) -> Result<(), IntegratorError> {
+    /// Finds the pins to eliminate among `rows` (with the pins' `projectors`); two pins
+    /// on one control point conflict.
+    pub fn setup(
+        &mut self,
+        rows: &[BasisValues],
+        projectors: &[Matrix3<Real>],
+    ) -> Result<(), IntegratorError> {
         self.pins.clear();
+        self.projectors.clear();
         for (p, row) in rows.iter().enumerate() {
             if let Some(k) = single_point(row) {
                 if self.pins.iter().any(|&(_, other)| other == k) {
                     return Err(IntegratorError::RedundantPins);
                 }
                 self.pins.push((p, k));
+                self.projectors.push(projectors[p]);
             }
         }
         Ok(())
@@ -66,9 +80,13 @@ impl PointPins {
         self.pins.iter().any(|&(q, _)| q == p)
     }
 
-    /// Whether control point `k` is held by an eliminated pin.
-    pub fn holds(&self, k: usize) -> bool {
-        self.pins.iter().any(|&(_, q)| q == k)
+    /// The projector onto the directions of control point `k` left free by the
+    /// eliminated pins (`I` if none holds it, 0 if one holds it fully).
+    pub fn free_directions(&self, k: usize) -> Matrix3<Real> {
+        let held = self.pins.iter().position(|&(_, q)| q == k);
+        held.map_or(Matrix3::identity(), |e| {
+            Matrix3::identity() - self.projectors[e]
+        })
     }
 
     /// Saves the eliminated columns of `a` (band and far blocks), then decouples them
@@ -86,17 +104,21 @@ impl PointPins {
         }
         self.save_far(a.far_blocks());
         self.save_low_rank(a);
-        for f in a.far_blocks_mut() {
-            if self.holds(f.row) || self.holds(f.col) {
-                f.block = Matrix3::zeros();
+        for (&(_, k), p) in self.pins.iter().zip(&self.projectors) {
+            let q = Matrix3::identity() - p;
+            for f in a.far_blocks_mut() {
+                if f.col == k {
+                    f.block *= q;
+                }
+                if f.row == k {
+                    f.block = q * f.block;
+                }
             }
-        }
-        for &(_, k) in &self.pins {
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 let value = if j == k {
-                    Matrix3::identity()
+                    q * a.block(k, k) * q + p
                 } else {
-                    Matrix3::zeros()
+                    a.block(j, k) * q
                 };
                 a.set_block(j, k, &value);
             }
@@ -118,8 +140,9 @@ impl PointPins {
             saved.1.clear();
             saved.1.extend_from_slice(&term.vector);
             self.low_rank_used += 1;
-            for &(_, k) in &self.pins {
-                term.vector[k] = Vector3::zeros();
+            for (&(_, k), p) in self.pins.iter().zip(&self.projectors) {
+                let held = p * term.vector[k];
+                term.vector[k] -= held;
             }
         }
     }
@@ -156,30 +179,32 @@ impl PointPins {
         for &(_, k) in &self.pins {
             self.rhs.push(flat3(b, k));
         }
-        for (e, &(p, k)) in self.pins.iter().enumerate() {
-            let delta = targets[p] - x[k];
+        let held = |e: usize| {
+            let (p, k) = self.pins[e];
+            self.projectors[e] * (targets[p] - x[k])
+        };
+        for (e, &(_, k)) in self.pins.iter().enumerate() {
+            let delta = held(e);
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 let change = self.saved[e * width + j + bw - k] * delta;
                 sub3(b, j, &change);
             }
         }
         for &(e, j, block) in &self.saved_far {
-            let (p, k) = self.pins[e];
-            sub3(b, j, &(block * (targets[p] - x[k])));
+            sub3(b, j, &(block * held(e)));
         }
         for (c, u) in self.low_rank() {
-            let s: Real = self
-                .pins
-                .iter()
-                .map(|&(p, k)| u[k].dot(&(targets[p] - x[k])))
+            let s: Real = (0..self.pins.len())
+                .map(|e| u[self.pins[e].1].dot(&held(e)))
                 .sum();
             for (j, u) in u.iter().enumerate() {
                 sub3(b, j, &(u * (c * s)));
             }
         }
-        for &(p, k) in &self.pins {
-            let delta = targets[p] - x[k];
-            b[3 * k..3 * k + 3].copy_from_slice(delta.as_slice());
+        for (e, &(_, k)) in self.pins.iter().enumerate() {
+            let q = Matrix3::identity() - self.projectors[e];
+            let value = q * flat3(b, k) + held(e);
+            b[3 * k..3 * k + 3].copy_from_slice(value.as_slice());
         }
     }
 
@@ -206,7 +231,7 @@ impl PointPins {
                 let s: Real = (0..n).map(|j| u[j].dot(&flat3(dx, j))).sum();
                 row += u[k] * (c * s);
             }
-            mu[p] = row;
+            mu[p] = self.projectors[e] * row;
         }
     }
 }
