@@ -69,6 +69,11 @@ impl Path {
     pub fn at(&self, t: Real) -> Vector3<Real> {
         self.0.at(t)
     }
+
+    /// The keyframes behind it.
+    pub fn keyframes(&self) -> &Keyframes<Vector3<Real>> {
+        &self.0
+    }
 }
 
 /// Checks keyframes `[t, v…]` of a scene field: at least one, finite, strictly

@@ -169,8 +169,8 @@ fn build_members(scene: &Scene) -> Result<Vec<(Scene, Simulation)>, Error> {
 }
 
 /// Prepares a member for its first stage: a static solve starts at the time the grabs,
-/// driven pins, turning clamps and keyframed loads reach their final targets, with every
-/// cut made; a dynamic one with the cuts due at time zero.
+/// driven pins, turning clamps, moving obstacles and keyframed loads reach their final
+/// targets, with every cut made; a dynamic one with the cuts due at time zero.
 fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Result<(), Error> {
     if scene.solver.method == Method::Static {
         let grabs = scene.grabs.iter().map(|g| g.end_time);
@@ -181,9 +181,14 @@ fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Resul
             .pins
             .iter()
             .filter_map(|p| p.turn.as_ref()?.last().map(|k| k[0]));
+        let moving = scene
+            .obstacles
+            .iter()
+            .filter_map(|o| o.motion().0?.last().map(|k| k[0]));
         let t = grabs
             .chain(paths)
             .chain(loads)
+            .chain(moving)
             .chain(turns)
             .fold(0.0, Real::max);
         (sim.time, sim.system.time) = (t, t);

@@ -82,7 +82,17 @@ impl Scene {
         params.exclusion = spec.exclusion.unwrap_or(params.exclusion);
         params.friction = spec.friction;
         params.slip_speed = spec.slip_speed.unwrap_or(params.slip_speed);
-        let obstacles = self.obstacles.iter().map(|o| o.obstacle());
-        Ok(Some(Contact::new(params)?.with_obstacles(obstacles)?))
+        let mut contact = Contact::new(params)?;
+        for (i, o) in self.obstacles.iter().enumerate() {
+            contact = match o.motion() {
+                (Some(keyframes), interpolation) => {
+                    let field = format!("obstacles[{i}].path");
+                    let path = crate::path::Path::new(keyframes, interpolation, &field)?;
+                    contact.with_moving_obstacle(o.obstacle(), path.keyframes().clone())?
+                }
+                (None, _) => contact.with_obstacles([o.obstacle()])?,
+            };
+        }
+        Ok(Some(contact))
     }
 }

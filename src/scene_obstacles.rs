@@ -1,7 +1,8 @@
-//! The `[[obstacles]]` scene tables (documented in `scenes/README.md`): rigid, static
-//! planes, spheres and capsules the rod stays out of, with `[contact]`'s penalty
+//! The `[[obstacles]]` scene tables (documented in `scenes/README.md`): rigid planes,
+//! spheres and capsules, static or translated along a keyframed `path`, the rod stays out of, with `[contact]`'s penalty
 //! stiffness and friction ([`Obstacle`]).
 
+use crate::path::Interpolation;
 use crate::scene::{finite_vec, positive, Scene};
 use crate::Error;
 use nalgebra::Vector3;
@@ -18,6 +19,11 @@ pub enum ObstacleSpec {
         point: [f64; 3],
         /// Normal towards the rod's side (normalised; not zero).
         normal: [f64; 3],
+        /// Keyframed translation `[t, dx, dy, dz]` (s, m). Default: static.
+        path: Option<Vec<[f64; 4]>>,
+        /// How the path moves between keyframes.
+        #[serde(default)]
+        interpolation: Interpolation,
     },
     /// A ball.
     Sphere {
@@ -25,6 +31,11 @@ pub enum ObstacleSpec {
         centre: [f64; 3],
         /// Radius, m (> 0).
         radius: f64,
+        /// Keyframed translation `[t, dx, dy, dz]` (s, m). Default: static.
+        path: Option<Vec<[f64; 4]>>,
+        /// How the path moves between keyframes.
+        #[serde(default)]
+        interpolation: Interpolation,
     },
     /// A cylinder of `radius` around the segment `a`–`b`, with rounded ends.
     Capsule {
@@ -34,6 +45,11 @@ pub enum ObstacleSpec {
         b: [f64; 3],
         /// Radius, m (> 0).
         radius: f64,
+        /// Keyframed translation `[t, dx, dy, dz]` (s, m). Default: static.
+        path: Option<Vec<[f64; 4]>>,
+        /// How the path moves between keyframes.
+        #[serde(default)]
+        interpolation: Interpolation,
     },
 }
 
@@ -42,7 +58,7 @@ impl ObstacleSpec {
     fn validate(&self, i: usize) -> Result<(), Error> {
         let field = |name: &str| format!("obstacles[{i}].{name}");
         match self {
-            ObstacleSpec::Plane { point, normal } => {
+            ObstacleSpec::Plane { point, normal, .. } => {
                 finite_vec(&field("point"), *point)?;
                 finite_vec(&field("normal"), *normal)?;
                 if Vector3::from(*normal).norm() == 0.0 {
@@ -50,11 +66,11 @@ impl ObstacleSpec {
                     return Err(Error::field(field("normal"), format!("{normal:?}"), reason));
                 }
             }
-            ObstacleSpec::Sphere { centre, radius } => {
+            ObstacleSpec::Sphere { centre, radius, .. } => {
                 finite_vec(&field("centre"), *centre)?;
                 positive(&field("radius"), *radius)?;
             }
-            ObstacleSpec::Capsule { a, b, radius } => {
+            ObstacleSpec::Capsule { a, b, radius, .. } => {
                 finite_vec(&field("a"), *a)?;
                 finite_vec(&field("b"), *b)?;
                 if a == b {
@@ -64,21 +80,45 @@ impl ObstacleSpec {
                 positive(&field("radius"), *radius)?;
             }
         }
+        if let (Some(keyframes), interpolation) = self.motion() {
+            crate::path::Path::new(keyframes, interpolation, &field("path"))?;
+        }
         Ok(())
+    }
+
+    /// The keyframed translation, if any, and its interpolation.
+    pub fn motion(&self) -> (Option<&Vec<[f64; 4]>>, Interpolation) {
+        match self {
+            ObstacleSpec::Plane {
+                path,
+                interpolation,
+                ..
+            }
+            | ObstacleSpec::Sphere {
+                path,
+                interpolation,
+                ..
+            }
+            | ObstacleSpec::Capsule {
+                path,
+                interpolation,
+                ..
+            } => (path.as_ref(), *interpolation),
+        }
     }
 
     /// The obstacle.
     pub fn obstacle(&self) -> Obstacle {
         match *self {
-            ObstacleSpec::Plane { point, normal } => Obstacle::Plane {
+            ObstacleSpec::Plane { point, normal, .. } => Obstacle::Plane {
                 point: point.into(),
                 normal: Vector3::from(normal).normalize(),
             },
-            ObstacleSpec::Sphere { centre, radius } => Obstacle::Sphere {
+            ObstacleSpec::Sphere { centre, radius, .. } => Obstacle::Sphere {
                 centre: centre.into(),
                 radius,
             },
-            ObstacleSpec::Capsule { a, b, radius } => Obstacle::Capsule {
+            ObstacleSpec::Capsule { a, b, radius, .. } => Obstacle::Capsule {
                 a: a.into(),
                 b: b.into(),
                 radius,

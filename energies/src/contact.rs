@@ -158,8 +158,10 @@ pub struct Contact {
     penalty: Penalty,
     detector: Mutex<Detector>,
     friction: Mutex<Friction>,
-    /// Rigid obstacles (see [`obstacle`]).
+    /// Rigid obstacles (see [`obstacle`]), where they are now.
     obstacles: Vec<Obstacle>,
+    /// Their keyframed motion.
+    motion: obstacle::Motion,
 }
 
 impl Clone for Contact {
@@ -168,6 +170,7 @@ impl Clone for Contact {
             params: self.params,
             penalty: self.penalty,
             obstacles: self.obstacles.clone(),
+            motion: self.motion.clone(),
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
         }
@@ -221,6 +224,7 @@ impl Contact {
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
             obstacles: Vec::new(),
+            motion: obstacle::Motion::default(),
         })
     }
 
@@ -321,10 +325,12 @@ impl Contact {
         for c in &d.pairs {
             let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(c));
             let len = pair_rows(&d, c, &mut weights);
-            friction.push(&weights[..len], &c.normal, lambda);
+            friction.push(&weights[..len], &c.normal, lambda, Vector3::zeros());
         }
         drop(d);
-        self.push_surface_friction(rod, |rows, n, lambda| friction.push(rows, n, lambda))
+        self.push_surface_friction(rod, dt, |rows, n, lambda, moved| {
+            friction.push(rows, n, lambda, moved)
+        })
     }
 
     fn friction_state(&self) -> MutexGuard<'_, Friction> {
@@ -377,6 +383,14 @@ impl Energy for Contact {
 
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
         Contact::begin_step(self, rod, dt)
+    }
+
+    fn drive(&mut self, t: Real) {
+        self.move_obstacles(t);
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.motion.paths.iter().any(Option::is_some)
     }
 
     fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {

@@ -4,7 +4,8 @@
 //! force then), its tangent projector \\(T = I - n n^T\\) and its weights `w` on the
 //! control points (the sample pair's \\(b_k(s_a) - b_k(s_b)\\), or the floor point's
 //! \\(b_k(s)\\)). During the step its tangential slip is
-//! \\(u = T \sum_k w_k (q_k - q_k^{start})\\), and the friction potential
+//! \\(u = T (\sum_k w_k (q_k - q_k^{start}) - m)\\), with `m` how far the surface moves in
+//! the step (a moving obstacle; zero otherwise), and the friction potential
 //!
 //! \\[ D = \sum_{\text{lags}} \mu \lambda f_0(|u|), \qquad
 //! f_0(y) = \begin{cases} y^2 / (2\epsilon) & y < \epsilon \\\\ y - \epsilon/2 & y \ge \epsilon \end{cases} \\]
@@ -28,6 +29,9 @@ pub(crate) struct Lag {
     pub tangent: Matrix3<Real>,
     /// Normal force, N.
     pub lambda: Real,
+    /// How far the surface touched moves in the step (a moving obstacle), m: slip is
+    /// measured against it.
+    pub surface_motion: Vector3<Real>,
 }
 
 /// The lags of the current step and the positions it started from.
@@ -50,13 +54,21 @@ impl Friction {
         self.epoch = Some(rod.topology_epoch());
     }
 
-    /// Adds a lag with weights `weights`, normal `normal` and force `lambda`.
-    pub fn push(&mut self, weights: &[(usize, Real)], normal: &Vector3<Real>, lambda: Real) {
+    /// Adds a lag with weights `weights`, normal `normal`, force `lambda` and the
+    /// surface's motion in the step `surface_motion` (zero but for moving obstacles).
+    pub fn push(
+        &mut self,
+        weights: &[(usize, Real)],
+        normal: &Vector3<Real>,
+        lambda: Real,
+        surface_motion: Vector3<Real>,
+    ) {
         let mut lag = Lag {
             weights: [(0, 0.0); 2 * MAX_ORDER],
             len: weights.len().min(2 * MAX_ORDER),
             tangent: Matrix3::identity() - normal * normal.transpose(),
             lambda,
+            surface_motion,
         };
         lag.weights[..lag.len].copy_from_slice(&weights[..lag.len]);
         self.lags.push(lag);
@@ -73,7 +85,7 @@ impl Friction {
             .iter()
             .map(|&(k, w)| (q[k] - self.start[k]) * w)
             .sum();
-        lag.tangent * moved
+        lag.tangent * (moved - lag.surface_motion)
     }
 
     /// \\(D\\) at the rod's positions, for coefficient `mu`.

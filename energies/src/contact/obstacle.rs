@@ -15,11 +15,15 @@
 //! (negative semi-definite for a convex obstacle of radius ρ), as self-contact does.
 //! The samples are those of the self-contact detection (spacing `0.2 r` by default), so
 //! an obstacle much thinner than a knot span is still seen.
+//!
+//! An obstacle may move by a keyframed translation ([`Contact::with_moving_obstacle`]):
+//! [`Energy::drive`](crate::Energy::drive) places it for the step's end, and its friction
+//! contacts measure slip against its surface's motion in the step.
 
 use super::surface::PenaltyPoint;
 use super::Contact;
 use nalgebra::Vector3;
-use splinerod_core::{CoreError, Real, Rod};
+use splinerod_core::{CoreError, Keyframes, Real, Rod};
 
 /// A rigid, static obstacle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,6 +54,25 @@ pub enum Obstacle {
 }
 
 impl Obstacle {
+    /// This obstacle moved by `d`.
+    pub fn translated(&self, d: &Vector3<Real>) -> Self {
+        match *self {
+            Obstacle::Plane { point, normal } => Obstacle::Plane {
+                point: point + d,
+                normal,
+            },
+            Obstacle::Sphere { centre, radius } => Obstacle::Sphere {
+                centre: centre + d,
+                radius,
+            },
+            Obstacle::Capsule { a, b, radius } => Obstacle::Capsule {
+                a: a + d,
+                b: b + d,
+                radius,
+            },
+        }
+    }
+
     /// Checks the shape: finite values, a unit normal, positive radii, a capsule axis of
     /// non-zero length.
     pub fn validate(&self) -> Result<(), CoreError> {
@@ -113,7 +136,55 @@ fn away_from(v: Vector3<Real>, radius: Real) -> (Real, Vector3<Real>) {
     (d - radius, n)
 }
 
+/// Obstacles moving on keyframed translations: their shapes at zero translation, their
+/// paths (`None`: static) and the time they were last driven to.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Motion {
+    pub base: Vec<Obstacle>,
+    pub paths: Vec<Option<Keyframes<Vector3<Real>>>>,
+    pub time: Real,
+}
+
+impl Motion {
+    /// How far obstacle `i` moves over the `dt` seconds before the time it was driven to.
+    pub fn step(&self, i: usize, dt: Real) -> Vector3<Real> {
+        match self.paths.get(i).and_then(Option::as_ref) {
+            Some(path) => path.at(self.time) - path.at(self.time - dt),
+            None => Vector3::zeros(),
+        }
+    }
+}
+
 impl Contact {
+    /// Adds a rigid obstacle moving by the translations `path` (m against s; its shape
+    /// as given is at zero translation), builder style.
+    pub fn with_moving_obstacle(
+        mut self,
+        obstacle: Obstacle,
+        path: Keyframes<Vector3<Real>>,
+    ) -> Result<Self, CoreError> {
+        obstacle.validate()?;
+        while self.motion.paths.len() < self.obstacles.len() {
+            let i = self.motion.paths.len();
+            self.motion.base.push(self.obstacles[i]);
+            self.motion.paths.push(None);
+        }
+        self.obstacles.push(obstacle.translated(&path.at(0.0)));
+        self.motion.base.push(obstacle);
+        self.motion.paths.push(Some(path));
+        Ok(self)
+    }
+
+    /// Moves the obstacles to their places at time `t`.
+    pub(crate) fn move_obstacles(&mut self, t: Real) {
+        self.motion.time = t;
+        for (i, path) in self.motion.paths.iter().enumerate() {
+            if let Some(path) = path {
+                self.obstacles[i] = self.motion.base[i].translated(&path.at(t));
+            }
+        }
+    }
+
     /// Calls `f` for every sample of the rod within the penalty's reach of an obstacle.
     pub(crate) fn for_each_obstacle_point(
         &self,
@@ -127,7 +198,7 @@ impl Contact {
         let (r, onset) = (self.params.radius, self.params.onset);
         let samples = &d.samples;
         for (k, x) in samples.position.iter().enumerate() {
-            for o in &self.obstacles {
+            for (i, o) in self.obstacles.iter().enumerate() {
                 let (distance, normal) = o.distance(x);
                 let gap = distance - r;
                 if gap < onset {
@@ -137,6 +208,7 @@ impl Contact {
                         normal,
                         first: samples.first[k] as usize,
                         row: samples.row(k),
+                        obstacle: Some(i),
                     });
                 }
             }

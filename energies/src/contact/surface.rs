@@ -28,6 +28,8 @@ pub(crate) struct PenaltyPoint<'a> {
     pub first: usize,
     /// Basis values there.
     pub row: &'a [Real],
+    /// The obstacle it touches (`None`: the floor).
+    pub obstacle: Option<usize>,
 }
 
 impl Contact {
@@ -50,6 +52,7 @@ impl Contact {
                     normal,
                     first: q.first,
                     row: q.value,
+                    obstacle: None,
                 });
             }
         }
@@ -104,11 +107,13 @@ impl Contact {
         })
     }
 
-    /// Freezes the surfaces' friction data for a step (normal forces and directions).
+    /// Freezes the surfaces' friction data for a step of `dt` seconds (normal forces,
+    /// directions and, for a moving obstacle, how far its surface moves in the step).
     pub(crate) fn push_surface_friction(
         &self,
         rod: &Rod,
-        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real),
+        dt: Real,
+        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real, Vector3<Real>),
     ) -> Result<(), CoreError> {
         let mut rows = [(0, 0.0); 2 * MAX_ORDER];
         self.for_each_surface_point(rod, |p| {
@@ -117,7 +122,10 @@ impl Contact {
                 *row = (p.first + k, *b);
             }
             let lambda = -p.weight * self.penalty.slope(p.gap);
-            push(&rows[..len], &p.normal, lambda);
+            let moved = p
+                .obstacle
+                .map_or(Vector3::zeros(), |i| self.motion.step(i, dt));
+            push(&rows[..len], &p.normal, lambda, moved);
         })
     }
 }
