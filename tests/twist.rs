@@ -346,3 +346,32 @@ fn the_plectoneme_trades_twist_for_writhe_without_passing_through_itself() {
         twist.link
     );
 }
+
+#[test]
+fn the_vtk_output_carries_the_material_frame() {
+    use splinerod::output::vtk::VtkWriter;
+    let dir = std::env::temp_dir().join(format!("splinerod_twist_vtk_{}", std::process::id()));
+    let scene = Scene::from_toml(&torsion_scene(8, 2.0, "static")).expect("scene");
+    let mut writer = VtkWriter::new(&dir, 1).expect("writer");
+    splinerod::run_observed(&scene, &mut [&mut writer]).expect("run");
+    let text = std::fs::read_to_string(dir.join("centreline_00001.vtp")).expect("equilibrium file");
+    let array = text
+        .split(r#"Name="material_director" NumberOfComponents="3" format="ascii">"#)
+        .nth(1)
+        .and_then(|rest| rest.split("</DataArray>").next())
+        .expect("material_director array");
+    let values: Vec<Real> = array
+        .split_whitespace()
+        .map(|v| v.parse().expect("number"))
+        .collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    // A straight rod along z turned by 2 rad: the director turns from x by Φ s/L.
+    let first = Vector3::new(values[0], values[1], values[2]);
+    let n = values.len();
+    let last = Vector3::new(values[n - 3], values[n - 2], values[n - 1]);
+    assert!((first - Vector3::x()).norm() < 1e-12, "{first:?}");
+    assert!(
+        (last - Vector3::new(2.0_f64.cos(), 2.0_f64.sin(), 0.0)).norm() < 1e-9,
+        "{last:?}"
+    );
+}

@@ -20,17 +20,29 @@ pub fn stripe(
     samples: usize,
 ) -> Result<Vec<Vector3<Real>>, Error> {
     let l = rod.material().rest_length;
+    let s: Vec<Real> = (0..samples)
+        .map(|k| l * k as Real / (samples - 1).max(1) as Real)
+        .collect();
+    let directors = directors(rod, twist, &s)?;
+    s.iter()
+        .zip(directors)
+        .map(|(&s, d)| Ok(rod.point(s)? + d * offset))
+        .collect()
+}
+
+/// The material director \\(d(s_k)\\) at the increasing material coordinates `s` (m),
+/// transported from sample to sample.
+pub fn directors(rod: &Rod, twist: &TwistSummary, s: &[Real]) -> Result<Vec<Vector3<Real>>, Error> {
+    let l = rod.material().rest_length;
     let mut director = Vector3::from(twist.start_director);
     let mut previous = Vector3::from(twist.axes[0]);
-    let mut out = Vec::with_capacity(samples);
-    for k in 0..samples {
-        let s = l * k as Real / (samples - 1).max(1) as Real;
+    let mut out = Vec::with_capacity(s.len());
+    for &s in s {
         let t = rod.tangent(s)?.normalize();
         director = parallel_transport(&previous, &t, &director);
         previous = t;
         let theta = twist.twist * s / l;
-        let turned = director * theta.cos() + t.cross(&director) * theta.sin();
-        out.push(rod.point(s)? + turned * offset);
+        out.push(director * theta.cos() + t.cross(&director) * theta.sin());
     }
     Ok(out)
 }

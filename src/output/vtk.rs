@@ -4,7 +4,8 @@
 //! * `centreline_NNNNN.vtp`: the curve sampled [`SAMPLES_PER_SPAN`] times per knot span,
 //!   one polyline per piece (so cuts show as gaps), with point data `s` (material
 //!   coordinate as a fraction of the rest length), `speed` (m/s) and `stretch`
-//!   (`γ = |C'(s)|`, the active scalars);
+//!   (`γ = |C'(s)|`, the active scalars), and on a rod with twist the vectors
+//!   `material_director` (the material frame's director, [`super::ribbon`]);
 //! * `polygon_NNNNN.vtp`: the control points, joined in order by one polyline per piece,
 //!   with point data `s` (Greville abscissa, fraction of the rest length) and `speed`;
 //! * `rod.pvd` and `polygon.pvd`: the two series with their time steps, written only at
@@ -56,6 +57,8 @@ struct Polylines {
     ends: Vec<usize>,
     /// Named point-data arrays, one value per point.
     arrays: Vec<(&'static str, Vec<Real>)>,
+    /// Named point-data vector arrays, one vector per point.
+    vectors: Vec<(&'static str, Vec<Vector3<Real>>)>,
     /// The array ParaView colours by.
     scalars: &'static str,
 }
@@ -91,7 +94,14 @@ impl VtkWriter {
         let index = self.timesteps.len();
         let rod = &frame.system.rod;
         let centre = self.dir.join(data_file("centreline", index));
-        write_polydata(&centre, &centreline(rod)?, frame)?;
+        let mut line = centreline(rod)?;
+        if let Some(twist) = frame.system.summary()?.twist {
+            let l = rod.material().rest_length;
+            let s: Vec<Real> = line.arrays[0].1.iter().map(|f| f * l).collect();
+            let directors = super::ribbon::directors(rod, &twist, &s)?;
+            line.vectors.push(("material_director", directors));
+        }
+        write_polydata(&centre, &line, frame)?;
         let polygon = self.dir.join(data_file("polygon", index));
         write_polydata(&polygon, &control_polygon(rod), frame)?;
         // A static solve stays at t = 0: number its two states instead.
@@ -187,6 +197,7 @@ fn centreline(rod: &Rod) -> Result<Polylines, Error> {
             ("stretch", Vec::new()),
         ],
         scalars: "stretch",
+        vectors: Vec::new(),
     };
     for piece in bounds.windows(2) {
         let (a, b) = (piece[0], piece[1]);
@@ -252,6 +263,7 @@ fn control_polygon(rod: &Rod) -> Polylines {
         ends,
         arrays: vec![("s", s), ("speed", speed)],
         scalars: "speed",
+        vectors: Vec::new(),
     }
 }
 
@@ -309,6 +321,14 @@ fn point_data(out: &mut impl Write, lines: &Polylines) -> io::Result<()> {
     for (name, values) in &lines.arrays {
         let header = format!(r#"type="Float64" Name="{name}""#);
         data_array(out, &header, values.iter().map(|&v| Num(v)))?;
+    }
+    for (name, values) in &lines.vectors {
+        let header = format!(r#"type="Float64" Name="{name}" NumberOfComponents="3""#);
+        data_array(
+            out,
+            &header,
+            values.iter().flat_map(|v| v.iter().map(|&c| Num(c))),
+        )?;
     }
     writeln!(out, "      </PointData>")
 }
