@@ -162,8 +162,9 @@ pub struct RunResult {
     pub solver: SolverTotals,
     /// Forces the pins exert on the rod at the end, N (static solves only).
     pub pin_forces: Vec<[Real; 3]>,
-    /// Torques the pins exert on the rod about their clamp axes at the end, N·m, one per
-    /// pin (with `rod.twist_stiffness` only: the twisting moment at the end clamps).
+    /// Torques the pins exert on the rod at the end, N·m, one per pin, about the pinned
+    /// point: an exact clamp's bending moment plus, with `rod.twist_stiffness`, the
+    /// twisting moment about the end clamps' axes (absent when no pin carries a torque).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pin_torques: Vec<[Real; 3]>,
     /// The twist between the end clamps at the end (with `rod.twist_stiffness` only).
@@ -291,7 +292,7 @@ pub(crate) fn finish(
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
         solver: tally.solver,
         pin_forces: scene_pin_forces(scene, sim),
-        pin_torques: crate::twist_output::pin_torques(scene, system)?,
+        pin_torques: pin_torques(scene, sim)?,
         twist: crate::twist_output::twist(system)?,
         pieces: rod.pieces(),
         control_points_history: tally.history,
@@ -323,6 +324,32 @@ fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
     }
     forces.truncate(scene.pins.len());
     forces.into_iter().map(Into::into).collect()
+}
+
+/// One torque per `[[pins]]` entry (N·m, about the pinned point): the twisting moment at
+/// the end clamps ([`crate::twist_output::pin_torques`]) plus, at an exact clamp, the
+/// bending moment of its pin pair, \\((q_1 - q_0) \times F_1\\) with \\(F_1\\) the force on
+/// the control point next to the end. Empty when no pin carries a torque.
+fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 3]>, Error> {
+    let mut torques = crate::twist_output::pin_torques(scene, &sim.system)?;
+    let forces = sim.integrator.pin_forces();
+    let (rod, l) = (&sim.system.rod, scene.rod.rest_length);
+    for i in scene.pins.len()..forces.len().min(sim.system.pins.len()) {
+        let pin = &sim.system.pins[i];
+        let clamp = scene
+            .pins
+            .iter()
+            .position(|p| p.clamp && p.at * l == pin.at);
+        let Some(j) = clamp.filter(|_| pin.tangent) else {
+            continue;
+        };
+        let next = pin.row(rod)?.first;
+        let end = if next == 1 { 0 } else { rod.len() - 1 };
+        let moment = (rod.positions[next] - rod.positions[end]).cross(&forces[i]);
+        torques.resize(scene.pins.len(), [0.0; 3]);
+        torques[j] = (nalgebra::Vector3::from(torques[j]) + moment).into();
+    }
+    Ok(torques)
 }
 
 /// Median of `values` (0 if empty); reorders them.

@@ -2,7 +2,7 @@
 //!
 //! * a clamp at an end of a rod with clamped knots holds the tangent's direction
 //!   exactly (to round-off) through a dynamic run and a static solve, and the clamp's
-//!   force is the rod's weight;
+//!   force is the rod's weight and its moment the weight's, W L / 2;
 //! * a pin sliding along an axis moves freely along it and holds across it: a rod pulled
 //!   by an end load along a rail stretches to the Green–Lagrange tension, the rail takes
 //!   no force along itself; across the rail the same load is held by the pin.
@@ -31,7 +31,7 @@ duration = 0.5
 
 /// Largest sideways component of the unit tangent at s = 0 over a run (from the
 /// sampled positions: the first two control points are the first samples' chord).
-fn tangent_deviation(text: &str) -> (f64, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+fn tangent_deviation(text: &str) -> (f64, splinerod::RunResult) {
     let scene = Scene::from_toml(text).expect("scene");
     let mut sim = scene.build().expect("simulation");
     let mut worst: f64 = 0.0;
@@ -49,15 +49,15 @@ fn tangent_deviation(text: &str) -> (f64, Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let t = sim.system.rod.tangent(0.0).expect("tangent").normalize();
         worst = worst.max(t.y.hypot(t.z));
     }
-    let result = run(&scene).expect("run");
-    (worst, result.pin_forces, result.samples.positions)
+    (worst, run(&scene).expect("run"))
 }
 
 #[test]
 fn an_exact_clamp_holds_the_tangent_to_round_off() {
     for method in ["implicit-euler", "implicit-midpoint", "bdf2", "static"] {
         let text = CANTILEVER.replace("\"implicit-euler\"", &format!("\"{method}\""));
-        let (deviation, forces, positions) = tangent_deviation(&text);
+        let (deviation, result) = tangent_deviation(&text);
+        let (forces, positions) = (&result.pin_forces, &result.samples.positions);
         let tip = positions[positions.len() - 1];
         println!(
             "{method}: tangent off its axis by {deviation:.1e}, tip y {:.6e}, clamp force {:?}",
@@ -74,6 +74,11 @@ fn an_exact_clamp_holds_the_tangent_to_round_off() {
                 "{} vs {exact}",
                 tip[1]
             );
+            // Its moment holds the weight's, W L / 2 about z.
+            let torque = result.pin_torques[0];
+            println!("clamp moment {torque:?} (W L / 2 = 0.4905)");
+            assert!((torque[2] - 0.4905).abs() < 1e-3 * 0.4905, "{torque:?}");
+            assert!(torque[0].abs() + torque[1].abs() < 1e-9, "{torque:?}");
         }
     }
 }
