@@ -310,20 +310,31 @@ pub(crate) fn finish(
 /// clamp's bending moment).
 fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
     let mut forces = sim.integrator.pin_forces();
+    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+        let extra = forces[i];
+        forces[j] += extra;
+    }
+    forces.truncate(scene.pins.len());
+    forces.into_iter().map(Into::into).collect()
+}
+
+/// `(i, j)` for every exact clamp: its tangent pin `i` in the system (below `count`) and
+/// its `[[pins]]` entry `j`.
+fn clamp_tangents<'a>(
+    scene: &'a Scene,
+    sim: &'a Simulation,
+    count: usize,
+) -> impl Iterator<Item = (usize, usize)> + 'a {
     let l = scene.rod.rest_length;
-    for i in scene.pins.len()..forces.len().min(sim.system.pins.len()) {
-        let pin = &sim.system.pins[i];
+    let pins = &sim.system.pins;
+    (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
+        let pin = &pins[i];
         let clamp = scene
             .pins
             .iter()
             .position(|p| p.clamp && p.at * l == pin.at);
-        if let (true, Some(j)) = (pin.tangent, clamp) {
-            let extra = forces[i];
-            forces[j] += extra;
-        }
-    }
-    forces.truncate(scene.pins.len());
-    forces.into_iter().map(Into::into).collect()
+        clamp.filter(|_| pin.tangent).map(|j| (i, j))
+    })
 }
 
 /// One torque per `[[pins]]` entry (N·m, about the pinned point): the twisting moment at
@@ -333,16 +344,9 @@ fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
 fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 3]>, Error> {
     let mut torques = crate::twist_output::pin_torques(scene, &sim.system)?;
     let forces = sim.integrator.pin_forces();
-    let (rod, l) = (&sim.system.rod, scene.rod.rest_length);
-    for i in scene.pins.len()..forces.len().min(sim.system.pins.len()) {
+    let rod = &sim.system.rod;
+    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
         let pin = &sim.system.pins[i];
-        let clamp = scene
-            .pins
-            .iter()
-            .position(|p| p.clamp && p.at * l == pin.at);
-        let Some(j) = clamp.filter(|_| pin.tangent) else {
-            continue;
-        };
         let next = pin.row(rod)?.first;
         let end = if next == 1 { 0 } else { rod.len() - 1 };
         let moment = (rod.positions[next] - rod.positions[end]).cross(&forces[i]);
