@@ -199,8 +199,8 @@ impl FineProblem for Mechanics<'_> {
             load, force, held, ..
         } = &mut *self.scratch;
         op.apply(self.acceleration, load);
-        for (l, v) in load.iter_mut().zip(&fine.velocities) {
-            *l += v * fine.damping;
+        for (i, (l, v)) in load.iter_mut().zip(&fine.velocities).enumerate() {
+            *l += v * fine.damping_at(i);
         }
         force.resize(fine.len(), Vector3::zeros());
         fine.mass_matrix().mul_vec3(load, force);

@@ -257,6 +257,32 @@ impl BlockBanded {
         }
     }
 
+    /// Adds `other` (a smaller matrix of the same or a narrower band) with its block
+    /// `(0, 0)` at `(first, first)`: band, far blocks and low-rank terms (their vectors
+    /// padded with zeros). For the Hessian of one part of a joined rod. Panics if it
+    /// does not fit.
+    #[track_caller]
+    pub fn add_shifted(&mut self, other: &BlockBanded, first: usize) {
+        assert!(first + other.n <= self.n, "block does not fit");
+        let w = other.bandwidth + 1;
+        for i in 0..other.n {
+            for k in 0..w.min(other.n - i) {
+                let b = &other.blocks[i * w + k];
+                if *b != Matrix3::zeros() {
+                    self.add_coupling(first + i, first + i + k, b);
+                }
+            }
+        }
+        for f in &other.far {
+            self.add_coupling(first + f.row, first + f.col, &f.block);
+        }
+        for t in other.low_rank() {
+            self.add_low_rank_with(t.coefficient, |u| {
+                u[first..first + other.n].copy_from_slice(&t.vector);
+            });
+        }
+    }
+
     /// Multiplies every entry by `c`.
     pub fn scale(&mut self, c: Real) {
         self.blocks.iter_mut().for_each(|b| *b *= c);
@@ -276,6 +302,28 @@ impl BlockBanded {
         for i in 0..self.n {
             for k in 0..=m.bandwidth().min(self.n - 1 - i) {
                 let v = c * m.get(i, i + k);
+                let b = &mut self.blocks[i * (self.bandwidth + 1) + k];
+                b[(0, 0)] += v;
+                b[(1, 1)] += v;
+                b[(2, 2)] += v;
+            }
+        }
+    }
+
+    /// Adds \\(\operatorname{diag}(c)\, M \otimes I_3\\): block `(i, j)` gains
+    /// `c(i) M_ij I`. Symmetric only when `c(i) = c(j)` wherever `M_ij ≠ 0` (a factor
+    /// constant on each block of a block-diagonal `M`, e.g. per joined rod); the upper
+    /// triangle stored here takes row `i`'s factor.
+    #[track_caller]
+    pub fn add_row_scaled_scalar(&mut self, c: impl Fn(usize) -> Real, m: &SymBanded) {
+        assert!(
+            m.dim() == self.n && m.bandwidth() <= self.bandwidth,
+            "shape mismatch"
+        );
+        for i in 0..self.n {
+            let ci = c(i);
+            for k in 0..=m.bandwidth().min(self.n - 1 - i) {
+                let v = ci * m.get(i, i + k);
                 let b = &mut self.blocks[i * (self.bandwidth + 1) + k];
                 b[(0, 0)] += v;
                 b[(1, 1)] += v;

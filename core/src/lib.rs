@@ -47,6 +47,7 @@ pub mod proximity;
 pub mod quadrature;
 pub mod refine;
 pub mod rod;
+pub mod segments;
 
 /// The scalar type of every physical quantity.
 pub type Real = f64;
@@ -64,6 +65,7 @@ pub use proximity::{closest_points, Closest, SpanBoxes};
 pub use quadrature::{GaussLegendre, QuadPoint, QuadratureTable};
 pub use refine::RefinementOperator;
 pub use rod::{Material, Rod};
+pub use segments::Segment;
 
 /// Which second derivative an energy adds to a Newton matrix.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -13,6 +13,7 @@
 //!
 //! and the rest is moved by one index (a memory move, no arithmetic).
 
+use crate::segments::Density;
 use crate::{BasisSpace, CoreError, KnotMap, KnotOperation, QuadratureTable, Real, SymBanded};
 use std::ops::Range;
 
@@ -51,12 +52,12 @@ impl ChangedRegion {
     }
 }
 
-/// Updates `table`, `mass` and `lumped` (density `mu`) from the basis before `map` to
+/// Updates `table`, `mass` and `lumped` (density `mu`, per segment) from the basis before `map` to
 /// `space`, the basis after it.
 pub fn update_caches(
     map: &KnotMap,
     space: &dyn BasisSpace,
-    mu: Real,
+    mu: Density<'_>,
     table: &mut QuadratureTable,
     mass: &mut SymBanded,
     lumped: &mut Vec<Real>,
@@ -78,13 +79,14 @@ pub fn update_caches(
 fn accumulate(
     table: &QuadratureTable,
     region: &ChangedRegion,
-    mu: Real,
+    mu: Density<'_>,
     mass: &mut SymBanded,
     lumped: &mut [Real],
 ) {
     let changed = &region.new_functions;
     for p in table.points_in(region.interval) {
         let qp = table.point(p);
+        let mu = mu.at(qp.s);
         for a in 0..qp.value.len() {
             let i = qp.first + a;
             let wa = mu * qp.weight * qp.value[a];

@@ -16,6 +16,7 @@ use crate::basis::{greville, BasisSpace, BasisValues, MAX_DEGREE};
 use crate::knot_map::KnotMap;
 use crate::quadrature::{GaussLegendre, QuadratureTable};
 use crate::refine::RefinementOperator;
+use crate::segments::{Density, Segment};
 use crate::{CoreError, Real};
 use nalgebra::Vector3;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -55,6 +56,8 @@ pub struct Rod {
     mass: SymBanded,
     lumped: Vec<Real>,
     topology_epoch: u64,
+    /// Rods joined into this one ([`Rod::join`]); empty for a rod on its own.
+    pub(crate) segments: Vec<Segment>,
 }
 
 impl Rod {
@@ -63,6 +66,16 @@ impl Rod {
         material: Material,
         basis: Box<dyn BasisSpace>,
         positions: Vec<Vector3<Real>>,
+    ) -> Result<Self, CoreError> {
+        Self::with_segments(material, basis, positions, Vec::new())
+    }
+
+    /// [`Rod::new`] with the densities of joined rods ([`Rod::join`]).
+    pub(crate) fn with_segments(
+        material: Material,
+        basis: Box<dyn BasisSpace>,
+        positions: Vec<Vector3<Real>>,
+        segments: Vec<Segment>,
     ) -> Result<Self, CoreError> {
         material.validate()?;
         let (start, end) = basis.domain();
@@ -94,6 +107,7 @@ impl Rod {
             mass: SymBanded::default(),
             lumped: Vec::new(),
             topology_epoch: next_epoch(),
+            segments,
         };
         rod.rebuild_caches(GaussLegendre::points_for_degree(rod.basis.degree()))?;
         Ok(rod)
@@ -148,6 +162,7 @@ impl Rod {
             mass: SymBanded::default(),
             lumped: Vec::new(),
             topology_epoch: next_epoch(),
+            segments: self.segments.clone(),
         };
         op.apply(&self.positions, &mut rod.positions);
         op.apply(&self.velocities, &mut rod.velocities);
@@ -161,10 +176,11 @@ impl Rod {
         let d = self.basis.degree();
         self.quadrature = QuadratureTable::new(self.basis.as_ref(), points)?;
         let n = self.basis.count();
-        let mu = self.material.linear_density;
+        let density = self.density();
         let mut mass = SymBanded::zeros(n, d);
         let mut lumped = vec![0.0; n];
         for qp in self.quadrature.points() {
+            let mu = density.at(qp.s);
             for a in 0..qp.value.len() {
                 let wa = mu * qp.weight * qp.value[a];
                 lumped[qp.first + a] += wa;
@@ -178,7 +194,16 @@ impl Rod {
         Ok(())
     }
 
-    /// Material constants.
+    /// Linear density per parameter value.
+    fn density(&self) -> Density<'_> {
+        Density {
+            uniform: self.material.linear_density,
+            segments: &self.segments,
+        }
+    }
+
+    /// Material constants (of the joined whole for a joined rod: its density is the
+    /// first segment's; see [`Rod::segments`]).
     pub fn material(&self) -> &Material {
         &self.material
     }
@@ -212,7 +237,7 @@ impl Rod {
     pub fn topology_epoch(&self) -> u64 {
         self.topology_epoch
     }
-    /// Total mass `μ L`.
+    /// Total mass \\(\int \mu\, ds\\).
     pub fn total_mass(&self) -> Real {
         self.lumped.iter().sum()
     }
@@ -310,10 +335,14 @@ impl Rod {
         map.apply_in_place(&mut self.positions);
         map.apply_in_place(&mut self.velocities);
         self.topology_epoch = next_epoch();
+        let density = Density {
+            uniform: self.material.linear_density,
+            segments: &self.segments,
+        };
         crate::local_update::update_caches(
             &map,
             self.basis.as_ref(),
-            self.material.linear_density,
+            density,
             &mut self.quadrature,
             &mut self.mass,
             &mut self.lumped,

@@ -4,7 +4,8 @@
 //! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12),
 //! [`Bending`] with the exact nonlinear curvature, a penalty [`Clamp`] on the tangent
 //! direction at a material point, uniform [`Gravity`], the [`PointSpring`] of a grab and the [`Contact`] penalty (self-contact,
-//! cut pieces, floor).
+//! cut pieces, floor). [`OnSegment`] puts any energy on one rod of a joined rod
+//! (several rods in one system).
 //! The [`conformance`] module checks any energy (gradient and
 //! Hessian against finite differences, symmetry, definiteness, invariances).
 //!
@@ -37,6 +38,7 @@ pub mod conformance;
 pub mod contact;
 mod energy;
 mod gravity;
+mod on_segment;
 mod point_force;
 mod point_spring;
 mod stretching;
@@ -47,6 +49,7 @@ pub use clamp::Clamp;
 pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary};
 pub use gravity::Gravity;
+pub use on_segment::OnSegment;
 pub use point_force::PointForce;
 pub use point_spring::PointSpring;
 pub use stretching::{Multipliers, StretchFormulation, Stretching};

@@ -16,6 +16,9 @@
 //! positions \\(\hat q + \beta x\\) and velocities `x` while Newton runs. Pins are reached
 //! at the *end* of the step, which is \\(\hat q + \rho x\\) with a reach `ρ` (= β except
 //! for the midpoint rule): \\(G x = (p - G\hat q)/\rho\\).
+//!
+//! For joined rods of different damping ([`Rod::join`](splinerod_core::Rod::join)),
+//! `αM` is \\(\operatorname{diag}(\alpha_i) M\\), one rate per control point.
 
 use crate::error::positive;
 use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
@@ -32,11 +35,55 @@ pub(crate) struct Increment {
     pub reach: Real,
 }
 
+/// Mass-proportional damping rates: one `α` for the rod, or one per control point
+/// (joined rods of different damping, [`Rod::damping_at`]).
+#[derive(Debug, Default)]
+struct DampingRates {
+    uniform: Real,
+    /// Empty when uniform.
+    per_point: Vec<Real>,
+}
+
+impl DampingRates {
+    /// `α_i`.
+    fn at(&self, i: usize) -> Real {
+        self.per_point.get(i).copied().unwrap_or(self.uniform)
+    }
+
+    /// Reads and checks the rod's rates (finite, non-negative).
+    fn read(&mut self, rod: &Rod) -> Result<(), IntegratorError> {
+        self.per_point.clear();
+        let check = |alpha: Real| {
+            if alpha.is_finite() && alpha >= 0.0 {
+                Ok(alpha)
+            } else {
+                let reason = "must be finite and non-negative";
+                Err(IntegratorError::InvalidParameter {
+                    name: "damping",
+                    value: alpha,
+                    reason,
+                })
+            }
+        };
+        match rod.uniform_damping() {
+            Some(alpha) => self.uniform = check(alpha)?,
+            None => {
+                for segment in rod.segments() {
+                    check(segment.damping)?;
+                }
+                self.per_point
+                    .extend((0..rod.len()).map(|i| rod.damping_at(i)));
+            }
+        }
+        Ok(())
+    }
+}
+
 struct IncrementalProblem<'a> {
     base_q: &'a [Vector3<Real>],
     base_v: &'a [Vector3<Real>],
     step: Increment,
-    alpha: Real,
+    alpha: &'a DampingRates,
     scratch: &'a mut [Vector3<Real>],
     hessian: HessianKind,
     definite_only: bool,
@@ -54,8 +101,17 @@ impl NewtonProblem for IncrementalProblem<'_> {
         let rod = system.rod();
         let beta = self.step.beta;
         let tmp = &mut *self.scratch;
-        for ((t, v), v0) in tmp.iter_mut().zip(&rod.velocities).zip(self.base_v) {
-            *t = v * (1.0 + beta * self.alpha) - v0;
+        let alpha = self.alpha;
+        if alpha.per_point.is_empty() {
+            for ((t, v), v0) in tmp.iter_mut().zip(&rod.velocities).zip(self.base_v) {
+                *t = v * (1.0 + beta * alpha.uniform) - v0;
+            }
+        } else {
+            // diag(α) commutes with M (constant on its diagonal blocks).
+            let rows = tmp.iter_mut().zip(&rod.velocities).zip(self.base_v);
+            for (((t, v), v0), a) in rows.zip(&alpha.per_point) {
+                *t = v * (1.0 + beta * a) - v0;
+            }
         }
         rod.mass_matrix().mul_vec3(tmp, r);
         tmp.iter_mut().for_each(|t| *t = Vector3::zeros());
@@ -71,7 +127,12 @@ impl NewtonProblem for IncrementalProblem<'_> {
         a.reset(rod.len(), system.hessian_bandwidth());
         system.add_potential_hessian(self.hessian, a);
         a.scale(beta * beta);
-        a.add_scaled_scalar(1.0 + beta * self.alpha, rod.mass_matrix());
+        if self.alpha.per_point.is_empty() {
+            a.add_scaled_scalar(1.0 + beta * self.alpha.uniform, rod.mass_matrix());
+        } else {
+            let alpha = self.alpha;
+            a.add_row_scaled_scalar(|i| 1.0 + beta * alpha.at(i), rod.mass_matrix());
+        }
     }
 
     fn merit(&mut self, system: &dyn System) -> Real {
@@ -83,8 +144,15 @@ impl NewtonProblem for IncrementalProblem<'_> {
             .for_each(|((t, v), v0)| *t = v - v0);
         let m = rod.mass_matrix();
         let inertia = 0.5 * m.bilinear_vec3(tmp, tmp);
-        let damping =
-            0.5 * self.step.beta * self.alpha * m.bilinear_vec3(&rod.velocities, &rod.velocities);
+        let half_beta = 0.5 * self.step.beta;
+        let damping = if self.alpha.per_point.is_empty() {
+            half_beta * self.alpha.uniform * m.bilinear_vec3(&rod.velocities, &rod.velocities)
+        } else {
+            for (i, (t, v)) in tmp.iter_mut().zip(&rod.velocities).enumerate() {
+                *t = v * self.alpha.at(i);
+            }
+            half_beta * m.bilinear_vec3(tmp, &rod.velocities)
+        };
         inertia + system.potential_energy() + damping
     }
 
@@ -131,7 +199,7 @@ pub(crate) struct Stepper {
     /// The unknown velocity `x`.
     pub x: Vec<Vector3<Real>>,
     scratch: Vec<Vector3<Real>>,
-    alpha: Real,
+    alpha: DampingRates,
     /// β of the last solve (pin forces are multipliers / β).
     beta: Real,
     /// Never factorise an indefinite matrix: every step descends to a minimum of the
@@ -145,17 +213,8 @@ impl Stepper {
     pub fn begin(&mut self, system: &dyn System, dt: Real) -> Result<(), IntegratorError> {
         positive("dt", dt)?;
         let rod = system.rod();
-        let alpha = rod.damping;
-        if !(alpha.is_finite() && alpha >= 0.0) {
-            let reason = "must be finite and non-negative";
-            return Err(IntegratorError::InvalidParameter {
-                name: "damping",
-                value: alpha,
-                reason,
-            });
-        }
+        self.alpha.read(rod)?;
         rod.check_finite()?;
-        self.alpha = alpha;
         let n = rod.len();
         for v in [
             &mut self.q0,
@@ -196,7 +255,7 @@ impl Stepper {
             base_q: &self.base_q,
             base_v: &self.base_v,
             step,
-            alpha: self.alpha,
+            alpha: &self.alpha,
             scratch: &mut self.scratch,
             hessian: HessianKind::Exact,
             definite_only: self.definite_only,
