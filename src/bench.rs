@@ -10,7 +10,8 @@
 //! * resident memory per control point of the 100 000-point cable and its solver;
 //! * wall time to settle the stiff (EA = 10⁴ N) catenary, released straight, to within
 //!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements);
-//! * the cost of the tolerance-driven adapt stage ([`crate::bench_adapt`]).
+//! * the cost of the tolerance-driven adapt stage ([`crate::bench_adapt`]);
+//! * the cost of several rods in one system ([`crate::bench_world`]).
 
 use crate::problems::pinned_cable;
 use crate::{Ensemble, Error, RodSystem, Simulation};
@@ -30,6 +31,9 @@ pub struct BenchResult {
     pub step_us_16_bending: Real,
     /// The same with the twisting energy, µs.
     pub step_us_16_twist: Real,
+    /// Median step of 8 independent 16-point cables in one system over 8 times one
+    /// cable's ([`crate::bench_world`]).
+    pub world_overhead_8: Real,
     /// Median static Newton iteration, 16 control points, µs.
     pub static_newton_us_16: Real,
     /// Median step time per control point, ns, by size.
@@ -238,6 +242,7 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         step_us_16,
         step_us_16_bending,
         step_us_16_twist,
+        world_overhead_8: crate::bench_world::world_overhead(8, scale(4_000, 400))?,
         static_newton_us_16,
         per_cp_ns,
         per_cp_flatness: hi / lo,

@@ -117,6 +117,7 @@ impl Scene {
         if r.stretch_formulation == StretchFormulationSpec::Mixed
             && r.bending_stiffness.is_none()
             && self.contact.is_none()
+            && (!self.part_of_world || self.reduced_quadrature)
         {
             let formulation = StretchFormulation::Mixed;
             rod = rod.with_quadrature_points(formulation.points_per_span(r.degree))?;
@@ -124,8 +125,12 @@ impl Scene {
         Ok(rod)
     }
 
-    /// The rod with its energies and pins.
+    /// The rod with its energies and pins; with `[[rods]]`, all rods joined in one
+    /// system ([`Rod::join`]).
     pub fn build_system(&self) -> Result<RodSystem, Error> {
+        if !self.rods.is_empty() {
+            return self.build_world();
+        }
         let rod = self.build_rod()?;
         let l = rod.material().rest_length;
         let ea = self.rod.stretch_stiffness;
@@ -163,7 +168,7 @@ impl Scene {
         for load in self.loads()? {
             system = system.with_load(load);
         }
-        if let Some(contact) = self.contact()? {
+        if let Some(contact) = self.contact()?.filter(|_| !self.part_of_world) {
             system = system.with_energy(contact);
         }
         Ok(system)
@@ -251,7 +256,7 @@ impl Scene {
         };
         let params = AdaptParams {
             max_control_points: a.max_control_points,
-            min_control_points: a.min_control_points.unwrap_or(self.rod.control_points),
+            min_control_points: a.min_control_points.unwrap_or(self.total_control_points()),
             min_span: a.min_span * l,
             shape_tolerance: a.shape_tolerance.unwrap_or(default_shape),
             hysteresis_steps: a.hysteresis_steps,
@@ -331,9 +336,10 @@ impl Scene {
         }
     }
 
-    /// Material coordinate (m) of a scene fraction.
+    /// Material coordinate (m) of a scene fraction (of the first rod, with `[[rods]]`:
+    /// see [`Scene::coordinate`]).
     pub fn material_coordinate(&self, fraction: Real) -> Real {
-        fraction * self.rod.rest_length
+        self.coordinate(0, fraction)
     }
 }
 

@@ -39,6 +39,8 @@ pub mod bench;
 #[cfg(feature = "parallel")]
 pub mod bench_adapt;
 pub mod bench_twist;
+#[cfg(feature = "parallel")]
+pub mod bench_world;
 mod build;
 pub mod elastic_catenary;
 mod ensemble;
@@ -56,6 +58,7 @@ pub mod problems;
 pub mod report;
 pub mod report_adaptive;
 mod report_md;
+pub mod rods_output;
 mod run_loop;
 mod run_summary;
 pub mod runner;
@@ -66,6 +69,7 @@ mod scene_ensemble;
 mod scene_loads;
 mod scene_obstacles;
 mod scene_pins;
+mod scene_rods;
 mod scene_shape;
 mod scene_solver;
 mod simulation;

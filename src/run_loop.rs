@@ -133,7 +133,7 @@ impl CutSchedule {
         let mut cuts: Vec<_> = scene
             .cuts
             .iter()
-            .map(|c| (c.time, scene.material_coordinate(c.at)))
+            .map(|c| (c.time, scene.entry_coordinate(c.rod.as_deref(), c.at)))
             .collect();
         cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
         Self { cuts, next: 0 }

@@ -35,7 +35,7 @@ impl RunResult {
             let e = a.estimated_error;
             out.push_str(&format!("estimated error: {e:.2e} m\n"));
         }
-        if self.pieces > 1 {
+        if self.pieces > self.rods.len().max(1) {
             out.push_str(&format!("{} pieces after cutting\n", self.pieces));
         }
         if let Some(k) = &self.knot {

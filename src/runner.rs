@@ -170,8 +170,12 @@ pub struct RunResult {
     /// The twist between the end clamps at the end (with `rod.twist_stiffness` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub twist: Option<TwistOutput>,
-    /// Mechanically independent pieces at the end (1 + the number of cuts).
+    /// Mechanically independent pieces at the end (rods + cuts).
     pub pieces: usize,
+    /// Each rod of a `[[rods]]` scene: name, control points, samples, energies. Empty
+    /// for a one-rod scene (whose rod is the top-level result).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub rods: Vec<crate::rods_output::RodOutput>,
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
     /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
@@ -295,6 +299,7 @@ pub(crate) fn finish(
         pin_torques: pin_torques(scene, sim)?,
         twist: crate::twist_output::twist(system)?,
         pieces: rod.pieces(),
+        rods: crate::rods_output::rods(scene, system)?,
         control_points_history: tally.history,
         median_step_seconds: if statics { 0.0 } else { median(step_seconds) },
         ensemble: Vec::new(),
@@ -325,14 +330,13 @@ fn clamp_tangents<'a>(
     sim: &'a Simulation,
     count: usize,
 ) -> impl Iterator<Item = (usize, usize)> + 'a {
-    let l = scene.rod.rest_length;
     let pins = &sim.system.pins;
     (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
         let pin = &pins[i];
         let clamp = scene
             .pins
             .iter()
-            .position(|p| p.clamp && p.at * l == pin.at);
+            .position(|p| p.clamp && scene.entry_coordinate(p.rod.as_deref(), p.at) == pin.at);
         clamp.filter(|_| pin.tangent).map(|j| (i, j))
     })
 }
@@ -348,7 +352,12 @@ fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 3]>, Error>
     for (i, j) in clamp_tangents(scene, sim, forces.len()) {
         let pin = &sim.system.pins[i];
         let next = pin.row(rod)?.first;
-        let end = if next == 1 { 0 } else { rod.len() - 1 };
+        let points = rod.segment_points(rod.segment_at(pin.at));
+        let end = if next == points.start + 1 {
+            points.start
+        } else {
+            points.end - 1
+        };
         let moment = (rod.positions[next] - rod.positions[end]).cross(&forces[i]);
         torques.resize(scene.pins.len(), [0.0; 3]);
         torques[j] = (nalgebra::Vector3::from(torques[j]) + moment).into();

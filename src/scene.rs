@@ -20,8 +20,13 @@ use splinerod_core::Requirement;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
-    /// The rod.
+    /// The rod; with `[[rods]]`, the first of them (see [`Scene::rods`]).
+    #[serde(default = "RodSpec::absent")]
     pub rod: RodSpec,
+    /// Several rods in one system (`[[rods]]`, instead of `[rod]`); empty for a scene
+    /// with one `[rod]`.
+    #[serde(default)]
+    pub rods: Vec<RodSpec>,
     /// Pinned material points.
     #[serde(default)]
     pub pins: Vec<PinSpec>,
@@ -51,12 +56,25 @@ pub struct Scene {
     /// Point loads.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
+    /// Set on the one-rod scenes a `[[rods]]` scene builds its rods from
+    /// ([`Scene::build_system`]): default quadrature, no contact of their own.
+    #[serde(skip)]
+    pub(crate) part_of_world: bool,
+    /// For a rod of a `[[rods]]` scene: whether all rods take the mixed stretching's
+    /// smaller quadrature.
+    #[serde(skip)]
+    pub(crate) reduced_quadrature: bool,
 }
 
 /// `[rod]`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RodSpec {
+    /// Name of the rod, for `rod = "…"` in pins, grabs, loads and cuts (`[[rods]]`).
+    pub name: Option<String>,
+    /// Set when the scene has no `[rod]` table (it has `[[rods]]`).
+    #[serde(skip)]
+    pub absent: bool,
     /// Rest length `L`, m (> 0): as given, or set by `overhand` ([`Scene::resolve_shape`]).
     #[serde(skip)]
     pub rest_length: f64,
@@ -243,6 +261,9 @@ impl Scene {
     /// Parses and validates a scene from TOML text.
     pub fn from_toml(text: &str) -> Result<Self, Error> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
+        if scene.resolve_rods()? {
+            return Ok(scene);
+        }
         scene.resolve_shape()?;
         scene.validate()?;
         Ok(scene)

@@ -96,6 +96,9 @@ pub const DEFAULT_RELATIVE_TOLERANCE: f64 = 1e-4;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GrabSpec {
+    /// The rod (its `name` in `[[rods]]`) this acts on; needed when the scene has
+    /// several rods.
+    pub rod: Option<String>,
     /// Material coordinate, fraction of the rest length in `[0, 1]`.
     pub at: f64,
     /// Target position reached at `end_time`, m.
@@ -113,6 +116,9 @@ pub struct GrabSpec {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CutSpec {
+    /// The rod (its `name` in `[[rods]]`) this acts on; needed when the scene has
+    /// several rods.
+    pub rod: Option<String>,
     /// Material coordinate, fraction of the rest length strictly inside `(0, 1)`.
     pub at: f64,
     /// When to cut, s (≥ 0); the cut happens after the first step ending at or past it.

@@ -12,6 +12,9 @@ use splinerod_energies::PointForce;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LoadSpec {
+    /// The rod (its `name` in `[[rods]]`) this acts on; needed when the scene has
+    /// several rods.
+    pub rod: Option<String>,
     /// Material coordinate, fraction of the rest length in `[0, 1]`.
     pub at: f64,
     /// A constant force, N.

@@ -10,6 +10,9 @@ use serde::Deserialize;
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PinSpec {
+    /// The rod (its `name` in `[[rods]]`) this acts on; needed when the scene has
+    /// several rods.
+    pub rod: Option<String>,
     /// Material coordinate, fraction of the rest length in `[0, 1]`.
     pub at: f64,
     /// Held position, m. Default: where the point starts; if given it must agree with the

@@ -60,7 +60,12 @@ impl BSplineSpace {
         let knots = (0..count + degree + 1)
             .map(|i| {
                 let k = i.saturating_sub(degree).min(spans);
-                length * k as Real / spans as Real
+                // The end exactly at `length` (k L / k can round below it).
+                if k == spans {
+                    length
+                } else {
+                    length * k as Real / spans as Real
+                }
             })
             .collect();
         Self::new(degree, knots)
@@ -72,7 +77,11 @@ impl BSplineSpace {
         check_layout(degree, count, length)?;
         let h = length / (count - degree) as Real;
         let knots = (0..count + degree + 1)
-            .map(|i| (i as Real - degree as Real) * h)
+            .map(|i| match i {
+                // The domain's end exactly at `length`.
+                i if i == count => length,
+                _ => (i as Real - degree as Real) * h,
+            })
             .collect();
         Self::new(degree, knots)
     }

@@ -49,12 +49,12 @@ impl Pin {
     /// exact clamp. Needs clamped end knots (multiplicity `d + 1`), where the end tangent
     /// is \\(\propto q_1 - q_0\\).
     pub fn tangent_at(rod: &Rod, at: Real) -> Result<Self, CoreError> {
-        let (start, end) = rod.basis().domain();
         let knots = rod.basis().knots();
         let d = rod.basis().degree();
+        let (start, end) = rod.basis().domain();
         let clamped = knots[..=d].iter().all(|k| *k == start)
             && knots[knots.len() - d - 1..].iter().all(|k| *k == end);
-        if !(clamped && (at == start || at == end)) {
+        if !(clamped && rod.segment_end(at).is_some()) {
             return Err(CoreError::InvalidParameter {
                 name: "clamp",
                 value: at,
@@ -104,13 +104,25 @@ impl Pin {
         }
         if self.tangent {
             let mut row = BasisValues::default();
-            let at_start = self.at <= rod.basis().domain().0;
-            row.first = if at_start {
-                1
+            // The control point next to the end of the pin's rod (its segment).
+            let points = rod.segment_points(rod.segment_at(self.at));
+            row.first = if rod.segment_end(self.at) == Some(true) {
+                points.start + 1
             } else {
-                rod.len().saturating_sub(2)
+                points.end.saturating_sub(2)
             };
             row.order = 1;
+            row.value[0] = 1.0;
+            return Ok(row);
+        }
+        if !rod.segments().is_empty() && rod.segment_end(self.at) == Some(false) {
+            // The end of a joined rod's segment: its last control point, exactly (the
+            // basis just below the junction matches it only to round-off).
+            let mut row = BasisValues {
+                first: rod.segment_points(rod.segment_at(self.at)).end - 1,
+                order: 1,
+                ..BasisValues::default()
+            };
             row.value[0] = 1.0;
             return Ok(row);
         }

@@ -61,6 +61,19 @@ impl Density<'_> {
     }
 }
 
+/// The largest float below `x` (`f64::next_down`, for the supported Rust versions).
+pub fn just_below(x: Real) -> Real {
+    if x.is_nan() || x == Real::NEG_INFINITY {
+        x
+    } else if x == 0.0 {
+        -Real::from_bits(1)
+    } else if x > 0.0 {
+        Real::from_bits(x.to_bits() - 1)
+    } else {
+        Real::from_bits(x.to_bits() + 1)
+    }
+}
+
 /// Index of the segment holding `s` (the later one on a junction; clamped to the ends).
 fn segment_index(segments: &[Segment], s: Real) -> usize {
     segments
@@ -88,11 +101,17 @@ impl Rod {
         for part in parts {
             check_joinable(part, d, first.quadrature().points_per_span())?;
             let own = part.basis().knots();
-            let skip = if knots.is_empty() { 0 } else { d + 1 };
-            knots.extend(own[skip..].iter().map(|t| t + offset));
+            let length = part.material().rest_length;
+            let (skip, last) = (if knots.is_empty() { 0 } else { d + 1 }, own.len() - d - 1);
+            // The clamped ends exactly at the segment's ends (a part's last knots may
+            // differ from its rest length by a rounding).
+            knots.extend(own.iter().enumerate().skip(skip).map(|(i, t)| match i {
+                i if i <= d => offset,
+                i if i >= last => offset + length,
+                _ => offset + t,
+            }));
             positions.extend_from_slice(&part.positions);
             velocities.extend_from_slice(&part.velocities);
-            let length = part.material().rest_length;
             segments.push(Segment {
                 start: offset,
                 end: offset + length,
@@ -137,6 +156,36 @@ impl Rod {
         rod.velocities.copy_from_slice(&self.velocities[range]);
         rod.damping = g.damping;
         Ok(rod)
+    }
+
+    /// The joined rod's parameter of material point `s` (m, `0 ≤ s ≤ L_k`) of segment
+    /// `k`. A segment's end shares its parameter with the next one's start, where the
+    /// curve takes the next segment's value; so the end of every segment but the last
+    /// is the largest float below the junction, where every basis function of the
+    /// segment equals its end value to round-off (the last control point's weight is 1
+    /// to within `ε L/h`). Without segments: `s`.
+    pub fn joined_coordinate(&self, k: usize, s: Real) -> Real {
+        match self.segments.get(k) {
+            None => s,
+            Some(g) if k + 1 < self.segments.len() && g.start + s >= g.end => just_below(g.end),
+            Some(g) => g.start + s,
+        }
+    }
+
+    /// Whether `at` is the start (`Some(true)`) or the end (`Some(false)`) of its segment
+    /// (of the rod without segments), in the sense of [`Rod::joined_coordinate`].
+    pub fn segment_end(&self, at: Real) -> Option<bool> {
+        let (start, end) = match self.segments.get(self.segment_at(at)) {
+            Some(g) => (g.start, g.end),
+            None => self.basis().domain(),
+        };
+        if at == start {
+            Some(true)
+        } else if at == end || at == just_below(end) {
+            Some(false)
+        } else {
+            None
+        }
     }
 
     /// The segments (rods of [`Rod::join`]); empty for a rod built on its own.

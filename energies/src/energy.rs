@@ -170,6 +170,12 @@ pub trait Energy: Send + Sync {
         true
     }
 
+    /// The segment of a joined rod this energy acts on alone ([`crate::OnSegment`]);
+    /// `None` (the default) for an energy of the whole rod.
+    fn segment(&self) -> Option<usize> {
+        None
+    }
+
     /// Statistics of the current state for reports; the default reports nothing.
     fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
         let _ = rod;

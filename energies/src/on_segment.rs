@@ -271,6 +271,10 @@ impl Energy for OnSegment {
         self.with(rod, false, |local| self.inner.admissible(&local.rod))
     }
 
+    fn segment(&self) -> Option<usize> {
+        Some(self.segment)
+    }
+
     fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
         self.with(rod, Ok(EnergySummary::default()), |local| {
             self.inner.summary(&local.rod)

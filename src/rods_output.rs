@@ -1,0 +1,52 @@
+//! The per-rod results of a `[[rods]]` scene (JSON `rods[i]`): each rod's name, control
+//! points, samples along it and its own energies (kinetic and every energy placed on it;
+//! contact acts between rods and stays in the top-level `energy`).
+
+use crate::runner::Samples;
+use crate::{Error, RodSystem, Scene};
+use serde::Serialize;
+use splinerod_core::Real;
+use std::collections::BTreeMap;
+
+/// One rod of a `[[rods]]` scene at the end of a run.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RodOutput {
+    /// Its `name`.
+    pub name: String,
+    /// Its control points now.
+    pub control_points: usize,
+    /// Evenly spaced points along it (`output.samples` of them).
+    pub samples: Samples,
+    /// Its energies, J, by name (`kinetic` included).
+    pub energy: BTreeMap<String, Real>,
+}
+
+/// Every rod's results; empty for a one-rod scene.
+pub fn rods(scene: &Scene, system: &RodSystem) -> Result<Vec<RodOutput>, Error> {
+    let rod = &system.rod;
+    let m = scene.output.samples;
+    let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
+    let mut out = Vec::with_capacity(scene.rods.len());
+    for (k, spec) in scene.rods.iter().enumerate() {
+        let positions = s
+            .iter()
+            .map(|&f| rod.point(scene.coordinate(k, f)).map(Into::into))
+            .collect::<Result<_, _>>()?;
+        let part = rod.segment_rod(k)?;
+        let mut energy = BTreeMap::from([("kinetic".to_string(), part.kinetic_energy())]);
+        for e in system.energies.iter().filter(|e| e.segment() == Some(k)) {
+            *energy.entry(e.name().to_string()).or_insert(0.0) += e.energy(rod);
+        }
+        out.push(RodOutput {
+            name: spec.name.clone().unwrap_or_default(),
+            control_points: part.len(),
+            samples: Samples {
+                s: s.clone(),
+                positions,
+                tension: Vec::new(),
+            },
+            energy,
+        });
+    }
+    Ok(out)
+}
