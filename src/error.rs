@@ -1,7 +1,7 @@
 //! The facade's error: every lower crate's error, plus scene and I/O errors.
 
 use splinerod_adaptivity::AdaptError;
-use splinerod_core::CoreError;
+use splinerod_core::{CoreError, Requirement};
 use splinerod_integrators::IntegratorError;
 
 /// Anything that can go wrong in splinerod.
@@ -116,5 +116,34 @@ impl Error {
             value: value.to_string(),
             reason: reason.into(),
         }
+    }
+}
+
+// Range checks of scene values: an error naming the field and the value.
+
+/// Error naming `field` and `v` unless `v` satisfies `requirement`.
+pub(crate) fn require(field: &str, v: f64, requirement: Requirement) -> Result<(), Error> {
+    requirement
+        .check(v)
+        .map_err(|reason| Error::field(field, v, reason))
+}
+
+pub(crate) fn positive(field: &str, v: f64) -> Result<(), Error> {
+    require(field, v, Requirement::Positive)
+}
+
+pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), Error> {
+    require(field, v, Requirement::NonNegative)
+}
+
+pub(crate) fn fraction(field: &str, v: f64) -> Result<(), Error> {
+    require(field, v, Requirement::Fraction)
+}
+
+pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
+    let finite = Requirement::Finite;
+    match v.iter().try_for_each(|&x| finite.check(x)) {
+        Ok(()) => Ok(()),
+        Err(reason) => Err(Error::field(field, format!("{v:?}"), reason)),
     }
 }

@@ -11,7 +11,7 @@
 //! * [`adaptivity`] — the [`RefinementCriterion`] trait.
 //!
 //! A [`RodSystem`] holds a rod, its pins and energies; a [`Simulation`] advances it with
-//! a boxed integrator; a [`Scene`] builds both from TOML and [`run`] executes it.
+//! a boxed integrator; a [`Scene`] builds both from TOML and [`run`](fn@run) executes it.
 //!
 //! ```
 //! use splinerod::prelude::*;
@@ -33,62 +33,55 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod adaptive_study;
+//! ## Layout
+//!
+//! * [`scene`] — the TOML format, one file per table (parse + validate), and building
+//!   the world from it;
+//! * [`world`] — the system of rods, pins, energies, grabs and loads, the simulation
+//!   that steps it, ensembles;
+//! * [`run`](mod@run) — the run loop, the observer interface and the result of a run (with its
+//!   twist, per-rod and ensemble parts);
+//! * [`output`] — observers writing pictures, plots, VTK, statistics and progress;
+//! * [`report`], [`problems`], [`bench`] — the accuracy report, its known-answer
+//!   problems, and the speed figures;
+//! * [`knot`] — knot shapes and curve invariants (crossings, writhe).
+//!
+//! Imports run one way: `world` uses none of the others; `scene` → `world`, `knot`;
+//! `run` → `scene`, `world`, `knot`; `output` → `run`; `problems` → `run`; `report` and
+//! `bench` → all of these. `knot` uses none.
+
 #[cfg(feature = "parallel")]
 pub mod bench;
-#[cfg(feature = "parallel")]
-pub mod bench_adapt;
-pub mod bench_twist;
-#[cfg(feature = "parallel")]
-pub mod bench_world;
-mod build;
-pub mod elastic_catenary;
-mod ensemble;
 mod error;
-pub mod estimate;
-mod grab;
-pub mod hard_cases;
 pub mod knot;
-mod knot_track;
-pub mod locking;
-pub mod observe;
 pub mod output;
-pub mod path;
 pub mod problems;
 pub mod report;
-pub mod report_adaptive;
-mod report_md;
-pub mod rods_output;
-mod run_loop;
-mod run_summary;
-pub mod runner;
+pub mod run;
 pub mod scene;
-mod scene_adapt;
-mod scene_contact;
-mod scene_ensemble;
-mod scene_loads;
-mod scene_obstacles;
-mod scene_pins;
-mod scene_rods;
-mod scene_shape;
-mod scene_solver;
-mod simulation;
-pub mod step_report;
-pub mod substep;
-mod system;
-mod twist_output;
-pub mod writhe;
+pub mod world;
 
-pub use ensemble::Ensemble;
+// The paths of the flat layout before the modules above, kept so code written against
+// them still compiles.
+#[cfg(feature = "parallel")]
+pub use bench::{adapt as bench_adapt, twist as bench_twist, world as bench_world};
+pub use knot::writhe;
+pub use problems::{elastic_catenary, hard_cases, locking};
+pub use report::{adaptive as report_adaptive, adaptive_study};
+pub use run::rods as rods_output;
+pub use run::{observe, runner};
+pub use world::{estimate, path, step_report, substep};
+
 pub use error::Error;
-pub use grab::Grab;
-pub use knot_track::KnotTrack;
-pub use observe::{Frame, Observer};
-pub use runner::{run, run_observed, RunResult};
+pub use run::knot_track::KnotTrack;
+pub use run::observe::{Frame, Observer};
+pub use run::runner::{run, run_observed, RunResult};
 pub use scene::Scene;
-pub use simulation::Simulation;
-pub use step_report::{StageTimes, StepReport};
-pub use system::{Load, PinDriver, RodSystem};
+pub use world::ensemble::Ensemble;
+pub use world::grab::Grab;
+pub use world::simulation::Simulation;
+pub use world::step_report::{StageTimes, StepReport};
+pub use world::system::{Load, PinDriver, RodSystem};
 
 pub use splinerod_adaptivity as adaptivity;
 pub use splinerod_core as core;

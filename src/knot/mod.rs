@@ -73,6 +73,7 @@
 mod diagram;
 mod relax;
 mod shape;
+pub mod writhe;
 
 pub use diagram::{
     is_alternating, is_trefoil_diagram, knot_determinant, knot_diagram, knot_extent,

@@ -3,7 +3,7 @@
 
 use super::diagram::{is_trefoil_diagram, polyline_crossings};
 use super::relax::{relaxed_fit, sample_curve, Target};
-use crate::scene::positive;
+use crate::error::positive;
 use crate::Error;
 use nalgebra::Vector3;
 use splinerod_core::{BSplineSpace, Material, Real, Rod, MAX_DEGREE};

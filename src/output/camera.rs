@@ -4,7 +4,7 @@
 //! [`crate::output::picture`]). Also the densely sampled [`centreline`].
 
 use super::plot::{HEIGHT, WIDTH};
-use crate::observe::Frame;
+use crate::run::observe::Frame;
 use crate::Error;
 use nalgebra::Vector3;
 use splinerod_core::{Real, Rod};

@@ -29,7 +29,7 @@
 pub use super::camera::{centreline, Camera, View};
 use super::camera::{framing_points, CAPTION, MARGIN};
 use super::plot::{write_images, Drawing, GifWriter, FONT, HEIGHT, WIDTH};
-use crate::observe::{Frame, Observer};
+use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, StepReport};
 use nalgebra::Vector3;
 use plotters::coord::Shift;

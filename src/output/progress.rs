@@ -1,7 +1,7 @@
 //! A progress bar for long runs (indicatif), drawn on standard error only when it is a
 //! terminal: piped or captured output stays clean.
 
-use crate::observe::{Frame, Observer};
+use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, StepReport};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use splinerod_core::Real;

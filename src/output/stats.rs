@@ -4,7 +4,7 @@
 //! Written to `OUT.csv.partial` and renamed at the end, so a run that fails leaves no
 //! file claiming to be complete.
 
-use crate::observe::{Frame, Observer};
+use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, StageTimes, StepReport};
 use splinerod_core::Real;
 use std::fs::File;

@@ -16,7 +16,7 @@
 //! `TimeValue` (s) and `step`. The files are ASCII (format version 0.1); a static solve
 //! records the initial state and the equilibrium, listed at time steps 0 and 1.
 
-use crate::observe::{Frame, Observer};
+use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, StepReport};
 use nalgebra::Vector3;
 use splinerod_core::basis::greville;

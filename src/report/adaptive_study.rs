@@ -12,7 +12,7 @@
 //! Errors are the largest distance between material points (201 on the grab, 41 on the
 //! cable). The effectivity index is the final estimate over the true error.
 
-use crate::elastic_catenary::ElasticCatenary;
+use crate::problems::elastic_catenary::ElasticCatenary;
 use crate::{Error, Real, RunResult, Scene};
 
 const GRAB: &str = r#"

@@ -15,7 +15,7 @@ pub struct TwistOutput {
     pub turn: Real,
     /// Twisting moment the clamps hold, N·m.
     pub moment: Real,
-    /// Writhe of the centreline closed along the clamp axes ([`crate::writhe`]), turns.
+    /// Writhe of the centreline closed along the clamp axes ([`crate::knot::writhe`]), turns.
     pub writhe: Real,
     /// Link `twist / 2π + writhe`, turns: by Călugăreanu's theorem the clamps' relative
     /// turn in turns (plus the link the rod started with).
@@ -31,7 +31,7 @@ pub(crate) fn twist(system: &RodSystem) -> Result<Option<TwistOutput>, Error> {
         return Ok(None);
     };
     let axes = t.axes.map(Vector3::from);
-    let writhe = crate::writhe::writhe(&system.rod, WRITHE_SAMPLES, axes)?;
+    let writhe = crate::knot::writhe::writhe(&system.rod, WRITHE_SAMPLES, axes)?;
     Ok(Some(TwistOutput {
         twist: t.twist,
         turn: t.turn,

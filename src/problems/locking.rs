@@ -7,7 +7,7 @@
 //! it) and the error is the largest distance between material points, at 41 points.
 //! `EA = ∞` compares with the inextensible catenary.
 
-use crate::elastic_catenary::ElasticCatenary;
+use crate::problems::elastic_catenary::ElasticCatenary;
 use crate::problems::pinned_cable_with;
 use crate::{Error, RodSystem};
 use nalgebra::Vector3;

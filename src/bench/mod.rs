@@ -10,8 +10,12 @@
 //! * resident memory per control point of the 100 000-point cable and its solver;
 //! * wall time to settle the stiff (EA = 10⁴ N) catenary, released straight, to within
 //!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements);
-//! * the cost of the tolerance-driven adapt stage ([`crate::bench_adapt`]);
-//! * the cost of several rods in one system ([`crate::bench_world`]).
+//! * the cost of the tolerance-driven adapt stage ([`crate::bench::adapt`]);
+//! * the cost of several rods in one system ([`crate::bench::world`]).
+
+pub mod adapt;
+pub mod twist;
+pub mod world;
 
 use crate::problems::pinned_cable;
 use crate::{Ensemble, Error, RodSystem, Simulation};
@@ -27,12 +31,12 @@ pub struct BenchResult {
     /// Median implicit Euler step, 16 control points, µs.
     pub step_us_16: Real,
     /// Median implicit Euler step of a 16-point rod clamped at both ends with stretching
-    /// and bending, µs ([`crate::bench_twist`]).
+    /// and bending, µs ([`crate::bench::twist`]).
     pub step_us_16_bending: Real,
     /// The same with the twisting energy, µs.
     pub step_us_16_twist: Real,
     /// Median step of 8 independent 16-point cables in one system over 8 times one
-    /// cable's ([`crate::bench_world`]).
+    /// cable's ([`crate::bench::world`]).
     pub world_overhead_8: Real,
     /// Median static Newton iteration, 16 control points, µs.
     pub static_newton_us_16: Real,
@@ -54,7 +58,7 @@ pub struct BenchResult {
     pub stiff_catenary_settle_s: Real,
     /// Control points used for that, the error reached (m) and the steps taken (dt = 0.02 s).
     pub stiff_catenary: (usize, Real, usize),
-    /// Cases of [`crate::hard_cases`] that ran with every step converged.
+    /// Cases of [`crate::problems::hard_cases`] that ran with every step converged.
     pub hard_cases_converged: usize,
     /// Cases in the hard-case suite.
     pub hard_cases_total: usize,
@@ -68,7 +72,7 @@ pub struct BenchResult {
 }
 
 /// The README's default scene, embedded.
-const DEFAULT_SCENE: &str = include_str!("../scenes/hanging_cable.toml");
+const DEFAULT_SCENE: &str = include_str!("../../scenes/hanging_cable.toml");
 
 /// Mean Newton iterations per step of the default scene.
 fn newton_per_step_default() -> Result<Real, Error> {
@@ -214,8 +218,8 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let scale = |full: usize, short: usize| if quick { short } else { full };
     let step_us_16 = step_seconds(16, scale(20_000, 2_000))? * 1e6;
     let static_newton_us_16 = static_newton_seconds(scale(200, 20))? * 1e6;
-    let step_us_16_bending = crate::bench_twist::step_seconds(false, scale(20_000, 2_000))? * 1e6;
-    let step_us_16_twist = crate::bench_twist::step_seconds(true, scale(20_000, 2_000))? * 1e6;
+    let step_us_16_bending = crate::bench::twist::step_seconds(false, scale(20_000, 2_000))? * 1e6;
+    let step_us_16_twist = crate::bench::twist::step_seconds(true, scale(20_000, 2_000))? * 1e6;
     let mut per_cp_ns = BTreeMap::new();
     let mut bytes_per_cp = 0.0;
     for (n, reps) in [
@@ -237,12 +241,12 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let one = ensemble_rate(count, steps, 1)?;
     let all = ensemble_rate(count, steps, threads)?;
     let (settle, n, error, steps) = stiff_catenary()?;
-    let hard_cases_total = crate::hard_cases::hard_cases()?.len();
+    let hard_cases_total = crate::problems::hard_cases::hard_cases()?.len();
     Ok(BenchResult {
         step_us_16,
         step_us_16_bending,
         step_us_16_twist,
-        world_overhead_8: crate::bench_world::world_overhead(8, scale(4_000, 400))?,
+        world_overhead_8: crate::bench::world::world_overhead(8, scale(4_000, 400))?,
         static_newton_us_16,
         per_cp_ns,
         per_cp_flatness: hi / lo,
@@ -253,13 +257,18 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         bytes_per_cp,
         stiff_catenary_settle_s: settle,
         stiff_catenary: (n, error, steps),
-        hard_cases_converged: crate::hard_cases::count_converged()?,
+        hard_cases_converged: crate::problems::hard_cases::count_converged()?,
         hard_cases_total,
         newton_per_step_default: newton_per_step_default()?,
-        adapt_fraction_16: crate::bench_adapt::adapt_fraction_16(scale(20_000, 2_000))?,
+        adapt_fraction_16: crate::bench::adapt::adapt_fraction_16(scale(20_000, 2_000))?,
         adapt_ns_per_cp: [(1_000, scale(640, 64)), (100_000, scale(64, 32))]
             .into_iter()
-            .map(|(n, reps)| Ok((n.to_string(), crate::bench_adapt::adapt_ns_per_cp(n, reps)?)))
+            .map(|(n, reps)| {
+                Ok((
+                    n.to_string(),
+                    crate::bench::adapt::adapt_ns_per_cp(n, reps)?,
+                ))
+            })
             .collect::<Result<_, Error>>()?,
     })
 }

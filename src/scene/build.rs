@@ -1,8 +1,8 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
-use crate::path::Path;
 use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene, StretchFormulationSpec};
+use crate::world::path::Path;
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
 use splinerod_adaptivity::{
@@ -233,7 +233,7 @@ impl Scene {
             let field = format!("pins[{i}].turn");
             pin.turn
                 .as_ref()
-                .map(|k| crate::path::schedule(k, pin.interpolation, &field))
+                .map(|k| crate::world::path::schedule(k, pin.interpolation, &field))
                 .transpose()
         };
         let twisting =

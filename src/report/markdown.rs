@@ -25,7 +25,7 @@ pub fn markdown(r: &Report, quick: bool) -> String {
     locking(&mut out, r);
     dynamics(&mut out, r);
     strings(&mut out, r);
-    crate::report_adaptive::markdown(&mut out, &r.adaptive);
+    crate::report::adaptive::markdown(&mut out, &r.adaptive);
     out
 }
 
@@ -130,9 +130,9 @@ fn locking(out: &mut String, r: &Report) {
             );
         }
     }
-    let peers: Vec<String> = crate::locking::RESOLUTIONS
+    let peers: Vec<String> = crate::problems::locking::RESOLUTIONS
         .iter()
-        .map(|&n| format!("{:.2e}", crate::locking::peer_error(n)))
+        .map(|&n| format!("{:.2e}", crate::problems::locking::peer_error(n)))
         .collect();
     let _ = writeln!(
         out,

@@ -12,7 +12,7 @@
 //! the next step, solve or estimate refuses to run on it
 //! ([`crate::Error::KnotsChangedUnheard`]) instead of reading stale caches.
 
-use crate::path::Path;
+use crate::world::path::Path;
 use crate::{Error, Grab};
 
 /// A force at a material point, constant or following a keyframed path of forces.

@@ -87,7 +87,7 @@ impl Scene {
             contact = match o.motion() {
                 (Some(keyframes), interpolation) => {
                     let field = format!("obstacles[{i}].path");
-                    let path = crate::path::Path::new(keyframes, interpolation, &field)?;
+                    let path = crate::world::path::Path::new(keyframes, interpolation, &field)?;
                     contact.with_moving_obstacle(o.obstacle(), path.keyframes().clone())?
                 }
                 (None, _) => contact.with_obstacles([o.obstacle()])?,

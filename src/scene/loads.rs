@@ -1,8 +1,8 @@
 //! The `[[loads]]` scene tables (documented in `scenes/README.md`): a force at a
 //! material point, constant (`force`) or keyframed (`path` of `[t, Fx, Fy, Fz]`).
 
-use crate::path::{Interpolation, Path};
 use crate::scene::{finite_vec, fraction, Scene};
+use crate::world::path::{Interpolation, Path};
 use crate::{Error, Load};
 use nalgebra::Vector3;
 use serde::Deserialize;

@@ -5,8 +5,8 @@
 //! the figures do not depend on two separate runs agreeing on the machine's speed.
 
 use crate::bench::one_iteration;
-use crate::estimate::MAX_INTERVAL;
 use crate::problems::pinned_cable;
+use crate::world::estimate::MAX_INTERVAL;
 use crate::{Error, Simulation};
 use splinerod_adaptivity::{AdaptParams, Adapter, ToleranceCriterion};
 use splinerod_core::Real;

@@ -13,17 +13,21 @@
 //! * Pareto: wall time against error, one curve per solver configuration.
 //! * Locking: the static catenary against the exact elastic catenary from EA = 10² to
 //!   10⁹ N for both stretching formulations, with the lumped-chain peers' EA-independent
-//!   error ([`crate::locking`]).
+//!   error ([`crate::problems::locking`]).
 //! * Adaptivity: tolerance-driven against uniform resolution, error against control
 //!   points and wall time, effectivity of the error estimate
-//!   ([`crate::report_adaptive`]).
+//!   ([`crate::report::adaptive`]).
 //!
 //! The catenary and string sweeps use the default (mixed) stretching; the static
 //! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
 //! rod is the one `order` states.
 
-use crate::locking::{self, LockingRow};
+pub mod adaptive;
+pub mod adaptive_study;
+mod markdown;
+
 use crate::output::plot::{line_plot, Series};
+use crate::problems::locking::{self, LockingRow};
 use crate::problems::{
     catenary_error, catenary_scene, catenary_scene_with, pluck, string_modes, string_reference,
 };
@@ -80,7 +84,7 @@ pub struct Report {
     /// Time-stepped string.
     pub strings: Vec<StringSample>,
     /// Adaptive against uniform resolution, per problem.
-    pub adaptive: Vec<crate::report_adaptive::AdaptiveSweep>,
+    pub adaptive: Vec<crate::report::adaptive::AdaptiveSweep>,
 }
 
 fn sizes(
@@ -147,7 +151,7 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
             report.strings.push(string_sample(name, dt, ft)?);
         }
     }
-    report.adaptive = crate::report_adaptive::measure(quick)?;
+    report.adaptive = crate::report::adaptive::measure(quick)?;
     Ok(report)
 }
 
@@ -241,8 +245,8 @@ pub fn write_report(dir: &Path, quick: bool) -> Result<Report, Error> {
     })?;
     let report = measure(quick)?;
     plot_all(dir, &report)?;
-    crate::report_adaptive::plot(dir, &report.adaptive)?;
-    let text = crate::report_md::markdown(&report, quick);
+    crate::report::adaptive::plot(dir, &report.adaptive)?;
+    let text = crate::report::markdown::markdown(&report, quick);
     let path = dir.join("report.md");
     std::fs::write(&path, text).map_err(|source| Error::Io {
         path: path.display().to_string(),

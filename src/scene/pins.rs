@@ -1,8 +1,8 @@
 //! The `[[pins]]` and `[world]` scene tables (documented in `scenes/README.md`): held
 //! and driven material points, and gravity.
 
-use crate::path::{Interpolation, Path};
 use crate::scene::{finite_vec, fraction, Scene};
+use crate::world::path::{Interpolation, Path};
 use crate::Error;
 use serde::Deserialize;
 
@@ -22,7 +22,7 @@ pub struct PinSpec {
     #[serde(default)]
     pub clamp: bool,
     /// Keyframes `[t, x, y, z]` (s, m) the pin follows: the first at time 0 where the
-    /// point starts, times increasing ([`crate::path`]).
+    /// point starts, times increasing ([`crate::world::path`]).
     pub path: Option<Vec<[f64; 4]>>,
     /// How the path and the turn move between keyframes. Default linear.
     #[serde(default)]
@@ -78,7 +78,7 @@ impl Scene {
             }
             if let Some(keyframes) = &pin.turn {
                 let field = format!("pins[{i}].turn");
-                crate::path::schedule(keyframes, pin.interpolation, &field)?;
+                crate::world::path::schedule(keyframes, pin.interpolation, &field)?;
                 let end = pin.at == 0.0 || pin.at == 1.0;
                 if !(pin.clamp && end && self.rod.twist_stiffness.is_some()) {
                     let reason = "only a clamp (clamp = true) at an end (at = 0 or 1) of a rod \

@@ -9,13 +9,13 @@
 //! knot tracking, due cuts, the control-point history, probes — and observers see
 //! member 0. Cuts due at the start (all of them for a static scene) are made first.
 
-use crate::estimate::EstimateOutput;
-use crate::knot_track::KnotTrack;
-use crate::observe::Observer;
-use crate::runner::{finish, frame, notify_finish, probes_at_start, ContactStats, Probe};
-use crate::runner::{RunResult, SolverTotals};
+use crate::run::ensemble::summarize;
+use crate::run::knot_track::KnotTrack;
+use crate::run::observe::Observer;
+use crate::run::runner::{finish, frame, notify_finish, probes_at_start, ContactStats, Probe};
+use crate::run::runner::{RunResult, SolverTotals};
 use crate::scene::{Method, Scene};
-use crate::scene_ensemble::summarize;
+use crate::world::estimate::EstimateOutput;
 use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
 use splinerod_core::Real;
 use splinerod_energies::EnergySummary;

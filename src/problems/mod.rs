@@ -8,6 +8,10 @@
 //!   transverse mode is f = 1/(2L)·√(T0/(γ0 μ)) and the first longitudinal
 //!   f = 1/(2L)·√(T'(γ0)/μ).
 
+pub mod elastic_catenary;
+pub mod hard_cases;
+pub mod locking;
+
 use crate::integrators::modal::{self, Mode};
 use crate::{Error, RodSystem, RunResult, Scene, Simulation};
 use nalgebra::Vector3;
@@ -16,8 +20,8 @@ use splinerod_core::{BSplineSpace, Material, Pin, Real, Rod};
 use splinerod_energies::{Gravity, StretchFormulation, Stretching};
 use splinerod_integrators::Integrator;
 
-const CATENARY_JSON: &str = include_str!("../tests/data/catenary_L1_D0.8_mu0.1_EA100.json");
-const STRING_JSON: &str = include_str!("../tests/data/string_L1_D1.2_mu0.1_EA100.json");
+const CATENARY_JSON: &str = include_str!("../../tests/data/catenary_L1_D0.8_mu0.1_EA100.json");
+const STRING_JSON: &str = include_str!("../../tests/data/string_L1_D1.2_mu0.1_EA100.json");
 
 /// The reference catenary: material fractions `s` and equilibrium positions `xy`.
 #[derive(Debug, Clone, Deserialize)]

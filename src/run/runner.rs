@@ -1,11 +1,12 @@
 //! Running a scene to its end and collecting the result that `splinerod run` prints and
 //! writes as JSON.
 
-use crate::estimate::EstimateOutput;
-use crate::knot_track::KnotTrack;
-use crate::observe::{Frame, Observer};
-use crate::run_loop::Tally;
-use crate::scene::{MemberSummary, Scene};
+use crate::run::ensemble::MemberSummary;
+use crate::run::knot_track::KnotTrack;
+use crate::run::main_loop::Tally;
+use crate::run::observe::{Frame, Observer};
+use crate::scene::Scene;
+use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
 use serde::Serialize;
 use splinerod_core::Real;
@@ -137,7 +138,7 @@ impl AddAssign for SolverTotals {
     }
 }
 
-pub use crate::twist_output::TwistOutput;
+pub use crate::run::twist::TwistOutput;
 
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -175,7 +176,7 @@ pub struct RunResult {
     /// Each rod of a `[[rods]]` scene: name, control points, samples, energies. Empty
     /// for a one-rod scene (whose rod is the top-level result).
     #[serde(skip_serializing_if = "Vec::is_empty")]
-    pub rods: Vec<crate::rods_output::RodOutput>,
+    pub rods: Vec<crate::run::rods::RodOutput>,
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
     /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
@@ -209,7 +210,7 @@ pub fn run_observed(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
 ) -> Result<RunResult, Error> {
-    crate::run_loop::run_scene(scene, observers)
+    crate::run::main_loop::run_scene(scene, observers)
 }
 
 pub(crate) fn frame<'a>(
@@ -297,9 +298,9 @@ pub(crate) fn finish(
         solver: tally.solver,
         pin_forces: scene_pin_forces(scene, sim),
         pin_torques: pin_torques(scene, sim)?,
-        twist: crate::twist_output::twist(system)?,
+        twist: crate::run::twist::twist(system)?,
         pieces: rod.pieces(),
-        rods: crate::rods_output::rods(scene, system)?,
+        rods: crate::run::rods::rods(scene, system)?,
         control_points_history: tally.history,
         median_step_seconds: if statics { 0.0 } else { median(step_seconds) },
         ensemble: Vec::new(),
@@ -342,11 +343,11 @@ fn clamp_tangents<'a>(
 }
 
 /// One torque per `[[pins]]` entry (N·m, about the pinned point): the twisting moment at
-/// the end clamps ([`crate::twist_output::pin_torques`]) plus, at an exact clamp, the
+/// the end clamps ([`crate::run::twist::pin_torques`]) plus, at an exact clamp, the
 /// bending moment of its pin pair, \\((q_1 - q_0) \times F_1\\) with \\(F_1\\) the force on
 /// the control point next to the end. Empty when no pin carries a torque.
 fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 3]>, Error> {
-    let mut torques = crate::twist_output::pin_torques(scene, &sim.system)?;
+    let mut torques = crate::run::twist::pin_torques(scene, &sim.system)?;
     let forces = sim.integrator.pin_forces();
     let rod = &sim.system.rod;
     for (i, j) in clamp_tangents(scene, sim, forces.len()) {

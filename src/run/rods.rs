@@ -2,7 +2,7 @@
 //! points, samples along it and its own energies (kinetic and every energy placed on it;
 //! contact acts between rods and stays in the top-level `energy`).
 
-use crate::runner::Samples;
+use crate::run::runner::Samples;
 use crate::{Error, RodSystem, Scene};
 use serde::Serialize;
 use splinerod_core::Real;

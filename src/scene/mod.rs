@@ -5,16 +5,27 @@
 //! Unknown fields are rejected, missing ones named by the parser, and every value is
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
-pub use crate::scene_adapt::{AdaptivitySpec, CutSpec, GrabSpec};
-pub use crate::scene_contact::ContactSpec;
-pub use crate::scene_ensemble::{EnsembleSpec, MemberSummary};
-pub use crate::scene_loads::LoadSpec;
-pub use crate::scene_obstacles::ObstacleSpec;
-pub use crate::scene_pins::{PinSpec, WorldSpec};
-pub use crate::scene_shape::{OverhandShape, RestShape, StretchFormulationSpec};
+pub(crate) mod adapt;
+mod build;
+pub(crate) mod contact;
+pub(crate) mod ensemble;
+pub(crate) mod loads;
+pub(crate) mod obstacles;
+pub(crate) mod pins;
+pub(crate) mod rods;
+pub(crate) mod shape;
+pub(crate) mod solver;
+
+pub(crate) use crate::error::{finite_vec, fraction, non_negative, positive};
+pub use crate::scene::adapt::{AdaptivitySpec, CutSpec, GrabSpec};
+pub use crate::scene::contact::ContactSpec;
+pub use crate::scene::ensemble::EnsembleSpec;
+pub use crate::scene::loads::LoadSpec;
+pub use crate::scene::obstacles::ObstacleSpec;
+pub use crate::scene::pins::{PinSpec, WorldSpec};
+pub use crate::scene::shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
-use splinerod_core::Requirement;
 
 /// A whole scene file.
 #[derive(Debug, Clone, Deserialize)]
@@ -360,7 +371,7 @@ impl Scene {
         }
         self.validate_obstacles()?;
         self.loads()?;
-        crate::scene_adapt::validate(
+        crate::scene::adapt::validate(
             self.adaptivity.as_ref(),
             &self.grabs,
             &self.cuts,
@@ -458,32 +469,5 @@ fn parse_error(text: &str, e: &toml::de::Error) -> Error {
             position: None,
             message,
         },
-    }
-}
-
-/// Error naming `field` and `v` unless `v` satisfies `requirement`.
-pub(crate) fn require(field: &str, v: f64, requirement: Requirement) -> Result<(), Error> {
-    requirement
-        .check(v)
-        .map_err(|reason| Error::field(field, v, reason))
-}
-
-pub(crate) fn positive(field: &str, v: f64) -> Result<(), Error> {
-    require(field, v, Requirement::Positive)
-}
-
-pub(crate) fn non_negative(field: &str, v: f64) -> Result<(), Error> {
-    require(field, v, Requirement::NonNegative)
-}
-
-pub(crate) fn fraction(field: &str, v: f64) -> Result<(), Error> {
-    require(field, v, Requirement::Fraction)
-}
-
-pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
-    let finite = Requirement::Finite;
-    match v.iter().try_for_each(|&x| finite.check(x)) {
-        Ok(()) => Ok(()),
-        Err(reason) => Err(Error::field(field, format!("{v:?}"), reason)),
     }
 }

@@ -14,9 +14,9 @@
 //! [`Simulation::settle`] the equilibrium at the current time, re-solved after every
 //! adapt stage that changed the knots.
 
-use crate::estimate::ErrorEstimation;
-use crate::step_report::{StageTimes, StepReport};
-use crate::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepState};
+use crate::world::estimate::ErrorEstimation;
+use crate::world::step_report::{StageTimes, StepReport};
+use crate::world::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepState};
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
 use splinerod_core::{Real, Rod};
@@ -102,7 +102,7 @@ impl Simulation {
     }
 
     /// Advances by `dt`, in as many sub-steps as the solver needs (see
-    /// [`crate::substep`]). On an integration error the state is unchanged and time does
+    /// [`crate::world::substep`]). On an integration error the state is unchanged and time does
     /// not advance.
     pub fn step(&mut self, dt: Real) -> Result<StepReport, Error> {
         if !(dt.is_finite() && dt > 0.0) {

@@ -1,10 +1,10 @@
 //! The report's adaptive-versus-uniform section (issue #13): the problems of
-//! [`crate::adaptive_study`] run adaptively over a sweep of tolerances and uniformly over
+//! [`crate::report::adaptive_study`] run adaptively over a sweep of tolerances and uniformly over
 //! a sweep of control points; true error against control points and against wall time,
 //! and the effectivity index (estimate / true error) of every run.
 
-use crate::adaptive_study::{adaptive_start, study_run, Answer, Problem, StudyRun};
 use crate::output::plot::{line_plot, Series};
+use crate::report::adaptive_study::{adaptive_start, study_run, Answer, Problem, StudyRun};
 use crate::Error;
 use splinerod_core::Real;
 use std::fmt::Write;

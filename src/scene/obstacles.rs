@@ -2,8 +2,8 @@
 //! spheres and capsules, static or translated along a keyframed `path`, the rod stays out of, with `[contact]`'s penalty
 //! stiffness and friction ([`Obstacle`]).
 
-use crate::path::Interpolation;
 use crate::scene::{finite_vec, positive, Scene};
+use crate::world::path::Interpolation;
 use crate::Error;
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -81,7 +81,7 @@ impl ObstacleSpec {
             }
         }
         if let (Some(keyframes), interpolation) = self.motion() {
-            crate::path::Path::new(keyframes, interpolation, &field("path"))?;
+            crate::world::path::Path::new(keyframes, interpolation, &field("path"))?;
         }
         Ok(())
     }

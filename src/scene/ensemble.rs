@@ -3,16 +3,12 @@
 //! displaced by a random amount, reproducibly from `seed` (member `i` draws from stream
 //! `i` of a ChaCha8 generator, so it gets the same values whatever the thread count).
 
-use crate::run_loop::Tally;
-use crate::runner::ContactStats;
 use crate::scene::{non_negative, positive};
 use crate::{Error, Scene, Simulation};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
-use splinerod_core::Real;
-use std::collections::BTreeMap;
+use serde::Deserialize;
 
 /// `[ensemble]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -33,32 +29,6 @@ pub struct EnsembleSpec {
     /// holds, m. Default 0.
     #[serde(default)]
     pub perturbation: f64,
-}
-
-/// What one member ended with.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct MemberSummary {
-    /// Member index.
-    pub index: usize,
-    /// Its axial stiffness, N.
-    pub stretch_stiffness: Real,
-    /// Its linear density, kg/m.
-    pub linear_density: Real,
-    /// Its damping, 1/s.
-    pub damping: Real,
-    /// Final sag: height of the chord between the rod's ends at mid-length minus the
-    /// height of the material midpoint (along y), m.
-    pub sag: Real,
-    /// Final energies, J (as the run's `energy`).
-    pub energy: BTreeMap<String, Real>,
-    /// Final control points.
-    pub control_points: usize,
-    /// Its contact statistics over the run (absent without `[contact]`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub contact: Option<ContactStats>,
-    /// Its last error estimate, m (absent without an estimator).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub estimated_error: Option<Real>,
 }
 
 fn range(field: &str, r: Option<[f64; 2]>, zero_allowed: bool) -> Result<(), Error> {
@@ -137,29 +107,4 @@ fn held_control_points(sim: &Simulation) -> Result<Vec<bool>, Error> {
         }
     }
     Ok(held)
-}
-
-/// The summary of a finished member (its scene, simulation and what it accumulated).
-pub(crate) fn summarize(
-    index: usize,
-    scene: &Scene,
-    sim: &Simulation,
-    tally: &Tally,
-) -> Result<MemberSummary, Error> {
-    let rod = &sim.system.rod;
-    let l = rod.material().rest_length;
-    let (a, b, m) = (rod.point(0.0)?, rod.point(l)?, rod.point(0.5 * l)?);
-    let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
-    energy.extend(sim.system.energy_breakdown());
-    Ok(MemberSummary {
-        index,
-        stretch_stiffness: scene.rod.stretch_stiffness,
-        linear_density: scene.rod.linear_density,
-        damping: scene.rod.damping,
-        sag: 0.5 * (a.y + b.y) - m.y,
-        energy,
-        control_points: rod.len(),
-        contact: tally.contact,
-        estimated_error: tally.estimates.as_ref().map(|e| e.estimated_error),
-    })
 }

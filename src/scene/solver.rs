@@ -1,7 +1,7 @@
 //! Validation of `[solver]` and the sub-stepping settings it gives a simulation.
 
 use crate::scene::{positive, Method, Scene};
-use crate::substep::StepControl;
+use crate::world::substep::StepControl;
 use crate::Error;
 
 impl Scene {

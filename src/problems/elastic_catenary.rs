@@ -101,7 +101,7 @@ impl ElasticCatenary {
 
     /// Largest relative difference between a run's tension samples (at the fractions
     /// `samples.s` of the rest length) and [`Self::tension`]; infinite without samples.
-    pub fn tension_error(&self, samples: &crate::runner::Samples) -> Real {
+    pub fn tension_error(&self, samples: &crate::run::runner::Samples) -> Real {
         if samples.tension.len() != samples.s.len() || samples.s.is_empty() {
             return Real::INFINITY;
         }

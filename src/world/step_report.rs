@@ -14,7 +14,7 @@ use splinerod_energies::EnergySummary;
 use splinerod_integrators::StepStats;
 use std::ops::AddAssign;
 
-use crate::substep::SubstepCounts;
+use crate::world::substep::SubstepCounts;
 
 /// Wall time of each stage of a step, s.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -73,7 +73,7 @@ pub struct StepReport {
     pub control_points: usize,
     /// Wall time of each stage, s.
     pub stages: StageTimes,
-    /// Sub-steps taken, rejected and the shortest one (see [`crate::substep`]).
+    /// Sub-steps taken, rejected and the shortest one (see [`crate::world::substep`]).
     pub substeps: SubstepCounts,
     /// What the energies report at the end of the step (contacts, ...).
     pub energies: EnergySummary,

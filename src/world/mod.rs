@@ -1,0 +1,17 @@
+//! The mechanical world a scene builds and a run advances: the [`RodSystem`] (rods —
+//! several joined into one — with pins, energies, grabs, drivers and loads), the
+//! [`Simulation`] that steps it (sub-stepping, step reports, the error estimate) and
+//! the [`Ensemble`] of many simulations. It knows nothing of scene files or outputs.
+//!
+//! [`RodSystem`]: crate::RodSystem
+//! [`Simulation`]: crate::Simulation
+//! [`Ensemble`]: crate::Ensemble
+
+pub(crate) mod ensemble;
+pub mod estimate;
+pub(crate) mod grab;
+pub mod path;
+pub(crate) mod simulation;
+pub mod step_report;
+pub mod substep;
+pub(crate) mod system;
