@@ -112,6 +112,22 @@ fn two_ropes_crossing_rest_on_each_other() {
         }
     }
     assert!(least >= 0.95, "clearance {least} of r₁ + r₂");
+    // The thin rope rests on the thick one: centre lines r₁ + r₂ = 16 mm apart.
+    let (a, b) = (
+        sim.system
+            .rod
+            .point(scene.coordinate(0, 0.5))
+            .expect("lower"),
+        sim.system
+            .rod
+            .point(scene.coordinate(1, 0.5))
+            .expect("upper"),
+    );
+    let gap = (b - a).norm();
+    assert!(
+        (gap - 0.016).abs() < 0.05 * 0.016,
+        "centre lines {gap} m apart"
+    );
     let rod = &sim.system.rod;
     let g = 9.81;
     let (lower, upper) = (0.1 * 1.0 * g, 0.05 * 0.6 * g);
@@ -133,6 +149,11 @@ fn two_ropes_crossing_rest_on_each_other() {
     );
     let held: Real = sim.integrator.pin_forces().iter().map(|f| f.y).sum();
     let both = lower + upper;
+    println!(
+        "contact on upper {:.6} N (weight {upper:.6}), pins {held:.6} N (weights {both:.6}), \
+         clearance {least:.4}",
+        on_upper.y
+    );
     assert!(
         (held - both).abs() < 0.01 * both,
         "pins hold {held} N of {both} N"

@@ -162,11 +162,22 @@ pub struct Contact {
     obstacles: Vec<Obstacle>,
     /// Their keyframed motion.
     motion: obstacle::Motion,
+    /// Radii per segment of a joined rod (see [`Contact::with_segment_radii`]).
+    radii: SegmentRadii,
+}
+
+/// The radius of each segment of a joined rod: `starts[k]` is where segment `k` starts
+/// in the parameter; empty for one radius (`params.radius`).
+#[derive(Debug, Clone, Default, PartialEq)]
+struct SegmentRadii {
+    starts: Vec<Real>,
+    values: Vec<Real>,
 }
 
 impl Clone for Contact {
     fn clone(&self) -> Self {
         Self {
+            radii: self.radii.clone(),
             params: self.params,
             penalty: self.penalty,
             obstacles: self.obstacles.clone(),
@@ -225,7 +236,60 @@ impl Contact {
             friction: Mutex::new(Friction::default()),
             obstacles: Vec::new(),
             motion: obstacle::Motion::default(),
+            radii: SegmentRadii::default(),
         })
+    }
+
+    /// Rods of different radii (builder style): `radii[k]` for the segment of a joined
+    /// rod that starts at parameter `starts[k]` (increasing, the first 0). Strands of
+    /// radii \(r_a, r_b\) keep their centre lines \(r_a + r_b\) apart, with the pair
+    /// weight \(w_a w_b / (r_a + r_b)^2\); the floor and obstacles keep each at its own
+    /// radius. `params.radius` should be the smallest (it sets the sample spacing and
+    /// the onset layer).
+    pub fn with_segment_radii(
+        mut self,
+        starts: &[Real],
+        radii: &[Real],
+    ) -> Result<Self, CoreError> {
+        for &r in radii {
+            positive("radius", r)?;
+        }
+        let increasing = starts.windows(2).all(|w| w[0] < w[1]);
+        if starts.len() != radii.len() || !increasing || starts.first() != Some(&0.0) {
+            return Err(CoreError::InvalidParameter {
+                name: "segment starts",
+                value: starts.len() as Real,
+                reason: "one increasing start per radius, the first at 0",
+            });
+        }
+        self.radii = SegmentRadii {
+            starts: starts.to_vec(),
+            values: radii.to_vec(),
+        };
+        Ok(self)
+    }
+
+    /// The radius of the rod at material coordinate `s`.
+    pub fn radius_at(&self, s: Real) -> Real {
+        let r = &self.radii;
+        if r.values.is_empty() {
+            return self.params.radius;
+        }
+        let k = r.starts.partition_point(|&t| t <= s).saturating_sub(1);
+        r.values[k]
+    }
+
+    /// The largest radius.
+    fn max_radius(&self) -> Real {
+        self.radii
+            .values
+            .iter()
+            .fold(self.params.radius, |a, &b| a.max(b))
+    }
+
+    /// Centre-line distance at which the penalty can start for some pair, `2 r_max + δ`.
+    fn reach(&self) -> Real {
+        2.0 * self.max_radius() + self.params.onset
     }
 
     /// Adds rigid obstacles (builder style), each validated.
@@ -253,7 +317,7 @@ impl Contact {
     fn detected(&self, rod: &Rod) -> Result<MutexGuard<'_, Detector>, CoreError> {
         let mut detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
         let p = &self.params;
-        detector.detect(rod, p.reach(), p.exclusion, [p.segment, p.spacing])?;
+        detector.detect(rod, self.reach(), p.exclusion, [p.segment, p.spacing])?;
         Ok(detector)
     }
 
@@ -265,7 +329,7 @@ impl Contact {
         mut f: impl FnMut(&ContactPoint),
     ) -> Result<(), CoreError> {
         let mut d = self.detected(rod)?;
-        d.closest(rod, self.params.reach())?;
+        d.closest(rod, self.reach())?;
         d.closest.iter().for_each(&mut f);
         Ok(())
     }
@@ -273,11 +337,15 @@ impl Contact {
     /// Counts and closest distance of the contacts at the rod's positions.
     pub fn summary(&self, rod: &Rod) -> Result<ContactSummary, CoreError> {
         let mut d = self.detected(rod)?;
-        d.closest(rod, self.params.reach())?;
+        d.closest(rod, self.reach())?;
         let min_distance = d.closest.iter().map(|c| c.distance).reduce(Real::min);
         let (pairs, candidates) = (d.closest.len(), d.candidate_count());
+        let strands = d
+            .closest
+            .iter()
+            .map(|c| c.distance / (self.radius_at(c.s) + self.radius_at(c.t)))
+            .reduce(Real::min);
         drop(d);
-        let strands = min_distance.map(|d| d / (2.0 * self.params.radius));
         let (obstacle_contacts, obstacles) = self.obstacle_summary(rod)?;
         let min_clearance_ratio = match (strands, obstacles) {
             (Some(a), Some(b)) => Some(a.min(b)),
@@ -300,13 +368,14 @@ impl Contact {
         let Ok(d) = self.detected(rod) else {
             return false;
         };
-        let floor = self.params.radius;
-        let apart = d.pairs.iter().all(|p| p.distance >= floor);
+        let apart = d
+            .pairs
+            .iter()
+            .all(|p| 2.0 * p.distance >= self.sum_of_radii(&d, p));
         drop(d);
         // No centre line inside an obstacle.
         let mut outside = true;
-        let r = self.params.radius;
-        let seen = self.for_each_obstacle_point(rod, |p| outside &= p.gap + r > 0.0);
+        let seen = self.for_each_obstacle_point(rod, |p| outside &= p.gap + p.radius > 0.0);
         apart && outside && seen.is_ok()
     }
 
@@ -323,7 +392,7 @@ impl Contact {
         let d = self.detected(rod)?;
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
         for c in &d.pairs {
-            let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(c));
+            let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c));
             let len = pair_rows(&d, c, &mut weights);
             friction.push(&weights[..len], &c.normal, lambda, Vector3::zeros());
         }
@@ -344,14 +413,24 @@ impl Contact {
         self.obstacle_interaction_points(rod, out)
     }
 
-    /// Weight of a sample pair: \\(w_a w_b / (2r)^2\\).
+    /// Weight of a sample pair: \\(w_a w_b / (r_a + r_b)^2\\).
     fn pair_weight(&self, d: &Detector, pair: &SamplePair) -> Real {
         let w = &d.samples.weight;
-        w[pair.a as usize] * w[pair.b as usize] / (4.0 * self.params.radius.powi(2))
+        w[pair.a as usize] * w[pair.b as usize] / self.sum_of_radii(d, pair).powi(2)
     }
 
-    fn gap(&self, pair: &SamplePair) -> Real {
-        pair.distance - 2.0 * self.params.radius
+    /// \\(r_a + r_b\\) of a sample pair.
+    fn sum_of_radii(&self, d: &Detector, pair: &SamplePair) -> Real {
+        if self.radii.values.is_empty() {
+            return 2.0 * self.params.radius;
+        }
+        let s = &d.samples.s;
+        self.radius_at(s[pair.a as usize]) + self.radius_at(s[pair.b as usize])
+    }
+
+    /// The gap \\(d - (r_a + r_b)\\) of a sample pair.
+    fn gap(&self, d: &Detector, pair: &SamplePair) -> Real {
+        pair.distance - self.sum_of_radii(d, pair)
     }
 }
 
@@ -424,7 +503,7 @@ impl Energy for Contact {
         let e: Real = d
             .pairs
             .iter()
-            .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(c)))
+            .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(&d, c)))
             .sum();
         drop(d);
         let surfaces = self.surface_energy(rod).unwrap_or(Real::NAN);
@@ -440,7 +519,7 @@ impl Energy for Contact {
         };
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
         for c in &d.pairs {
-            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(c)));
+            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
             let len = pair_rows(&d, c, &mut weights);
             for &(i, w) in &weights[..len] {
                 gradient[i] += force * w;
@@ -474,7 +553,7 @@ impl Energy for Contact {
                     .flat_map(|c| (0..order).flat_map(move |k| [first(c.a) + k, first(c.b) + k])),
             );
             for c in pairs {
-                let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(c));
+                let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(&d, c));
                 let len = pair_rows(&d, c, &mut weights);
                 local.add(
                     &weights[..len],

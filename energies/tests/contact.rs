@@ -311,3 +311,34 @@ fn friction_gradient_matches_finite_differences_sticking_and_sliding() {
     }
     assert!(c.begin_step(&base, 0.0).is_err());
 }
+
+/// Pieces of radii r₁ = R and r₂ = 0.4 R (`with_segment_radii`, the second piece
+/// starting at s = 1): the penalty starts at centre distance r₁ + r₂ + δ, matches the
+/// one-radius penalty of a pair with the same sum, and clearance is d / (r₁ + r₂).
+#[test]
+fn pieces_of_different_radii_keep_the_sum_of_their_radii_apart() {
+    let r2 = 0.4 * R;
+    let two = contact()
+        .with_segment_radii(&[0.0, 1.0], &[R, r2])
+        .expect("radii");
+    let sum = R + r2;
+    let far = crossing(sum + 0.11 * R, 0.5);
+    assert_eq!(two.energy(&far), 0.0, "beyond r₁ + r₂ + δ");
+    let near = crossing(0.9 * sum, 0.5);
+    let summary = two.summary(&near).expect("summary");
+    let ratio = summary.min_clearance_ratio.expect("touching");
+    assert!((ratio - 0.9).abs() < 1e-9, "clearance {ratio}");
+    // The same gap between two pieces of radius (r₁ + r₂)/2 gives the same energy.
+    let mean = Contact::new(ContactParams::new(0.5 * sum, K).expect("params")).expect("c");
+    let mut params = *mean.params();
+    params.onset = 0.1 * R;
+    params.spacing = 0.2 * R;
+    params.segment = 2.1 * R;
+    let mean = Contact::new(params).expect("contact");
+    let (a, b) = (two.energy(&near), mean.energy(&near));
+    assert!(a > 0.0 && (a - b).abs() < 1e-9 * b, "{a} vs {b}");
+    assert!(contact().with_segment_radii(&[0.0], &[R, r2]).is_err());
+    assert!(contact()
+        .with_segment_radii(&[0.0, 1.0], &[R, -1.0])
+        .is_err());
+}

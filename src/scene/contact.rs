@@ -6,6 +6,7 @@
 use crate::scene::{non_negative, positive, Scene};
 use crate::Error;
 use serde::Deserialize;
+use splinerod_core::Real;
 use splinerod_energies::{Contact, ContactParams};
 
 /// `[contact]`.
@@ -73,7 +74,11 @@ impl Scene {
             return Ok(None);
         };
         spec.validate(self.rod.radius)?;
-        let radius = self.rod.radius.unwrap_or_default();
+        // The thinnest rod's radius sets the sampling and the onset layer.
+        let radius = (0..self.rod_count())
+            .filter_map(|k| self.rod_spec(k).radius)
+            .fold(Real::INFINITY, Real::min);
+        let radius = if radius.is_finite() { radius } else { 0.0 };
         let mut params = ContactParams::new(radius, spec.stiffness)?;
         if let Some(h) = spec.floor {
             params = params.with_floor(h)?;

@@ -10,8 +10,9 @@
 //! (between rods, with the floor and obstacles) acts on the joined rod, in the same
 //! Newton matrix as everything else.
 //!
-//! Limits, checked with a clear error: one degree for all rods, one `radius` when
-//! `[contact]` is on, no `[ensemble]`.
+//! Limits, checked with a clear error: one degree for all rods, no `[ensemble]`. Rods
+//! of different radii keep their centre lines `r₁ + r₂` apart
+//! ([`splinerod_energies::Contact::with_segment_radii`]).
 
 use crate::scene::{RodSpec, Scene, StretchFormulationSpec};
 use crate::{Error, PinDriver, RodSystem};
@@ -204,8 +205,8 @@ impl Scene {
         Ok(())
     }
 
-    /// What the rods must share: the degree, the radius under `[contact]`, and room for
-    /// all of them under `adaptivity.max_control_points`.
+    /// What the rods must share: the degree, and room for all of them under
+    /// `adaptivity.max_control_points`.
     fn check_together(&self) -> Result<(), Error> {
         let first = &self.rods[0];
         for (k, r) in self.rods.iter().enumerate().skip(1) {
@@ -215,14 +216,6 @@ impl Scene {
                     first.degree
                 );
                 return Err(Error::field(format!("rods[{k}].degree"), r.degree, reason));
-            }
-            if self.contact.is_some() && r.radius != first.radius {
-                let reason = format!(
-                    "rods in contact share one radius for now (rods[0] has {:?})",
-                    first.radius
-                );
-                let field = format!("rods[{k}].radius");
-                return Err(Error::field(field, format!("{:?}", r.radius), reason));
             }
         }
         if let Some(a) = self.adaptivity.as_ref().filter(|a| a.enabled) {
@@ -299,6 +292,9 @@ impl Scene {
         system.grabs = grabs.into_iter().flatten().collect();
         system.loads = loads.into_iter().flatten().collect();
         if let Some(contact) = self.contact()? {
+            let starts: Vec<Real> = system.rod.segments().iter().map(|g| g.start).collect();
+            let radii: Vec<Real> = self.rods.iter().map(|r| r.radius.unwrap_or(0.0)).collect();
+            let contact = contact.with_segment_radii(&starts, &radii)?;
             system = system.with_energy(contact);
         }
         Ok(system)

@@ -195,9 +195,10 @@ impl Contact {
             return Ok(());
         }
         let d = self.detected(rod)?;
-        let (r, onset) = (self.params.radius, self.params.onset);
+        let onset = self.params.onset;
         let samples = &d.samples;
         for (k, x) in samples.position.iter().enumerate() {
+            let r = self.radius_at(samples.s[k]);
             for (i, o) in self.obstacles.iter().enumerate() {
                 let (distance, normal) = o.distance(x);
                 let gap = distance - r;
@@ -209,6 +210,7 @@ impl Contact {
                         first: samples.first[k] as usize,
                         row: samples.row(k),
                         obstacle: Some(i),
+                        radius: r,
                     });
                 }
             }
@@ -227,9 +229,10 @@ impl Contact {
             return Ok(());
         }
         let d = self.detected(rod)?;
-        let (r, onset) = (self.params.radius, self.params.onset);
+        let onset = self.params.onset;
         for o in &self.obstacles {
-            let gaps = d.samples.position.iter().map(|x| o.distance(x).0 - r);
+            let samples = d.samples.position.iter().zip(&d.samples.s);
+            let gaps = samples.map(|(x, &s)| o.distance(x).0 - self.radius_at(s));
             let closest = gaps.enumerate().min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((k, _)) = closest.filter(|(_, g)| *g < onset) {
                 out.push(d.samples.s[k]);
@@ -242,10 +245,9 @@ impl Contact {
     /// line from an obstacle over the rod's radius (`None` without such contacts).
     pub(crate) fn obstacle_summary(&self, rod: &Rod) -> Result<(usize, Option<Real>), CoreError> {
         let (mut count, mut least) = (0, None::<Real>);
-        let r = self.params.radius;
         self.for_each_obstacle_point(rod, |p| {
             count += 1;
-            let ratio = (p.gap + r) / r;
+            let ratio = (p.gap + p.radius) / p.radius;
             least = Some(least.map_or(ratio, |l| l.min(ratio)));
         })?;
         Ok((count, least))

@@ -30,6 +30,8 @@ pub(crate) struct PenaltyPoint<'a> {
     pub row: &'a [Real],
     /// The obstacle it touches (`None`: the floor).
     pub obstacle: Option<usize>,
+    /// The rod's radius there, m.
+    pub radius: Real,
 }
 
 impl Contact {
@@ -44,15 +46,17 @@ impl Contact {
             let x: Vector3<Real> = (0..q.value.len())
                 .map(|k| rod.positions[q.first + k] * q.value[k])
                 .sum();
-            let gap = normal.dot(&x) - height - self.params.radius;
+            let r = self.radius_at(q.s);
+            let gap = normal.dot(&x) - height - r;
             if gap < self.params.onset {
                 f(&PenaltyPoint {
                     gap,
-                    weight: q.weight / (2.0 * self.params.radius),
+                    weight: q.weight / (2.0 * r),
                     normal,
                     first: q.first,
                     row: q.value,
                     obstacle: None,
+                    radius: r,
                 });
             }
         }
