@@ -1,6 +1,6 @@
 //! Rigid obstacles in scenes: a rope draped over a sphere or a capsule is held by
-//! friction above the capstan threshold and slides off below it, without entering the
-//! obstacle; bad `[[obstacles]]` entries are refused naming the field.
+//! friction above the capstan threshold (pressing on it with its weight) and slides off
+//! below it, without entering the obstacle; bad `[[obstacles]]` entries are refused naming the field.
 
 mod common;
 
@@ -44,6 +44,18 @@ fn friction_above_the_capstan_threshold_holds_a_draped_rope() {
         let c = held.contact.expect("contact statistics");
         let clearance = c.min_clearance_ratio.expect("touching");
         assert!(clearance >= 0.95, "{obstacle}: clearance {clearance}");
+        // Held at rest, the rope presses on the obstacle with its whole weight
+        // (JSON `obstacle_forces`: penalty and friction).
+        let weight = 0.1 * 1.0 * 9.81;
+        let [fx, fy, fz] = held.obstacle_forces[0];
+        assert!(
+            (fy + weight).abs() < 0.01 * weight,
+            "{obstacle}: {fy} N vs {weight}"
+        );
+        assert!(
+            fx.hypot(fz) < 0.02 * weight,
+            "{obstacle}: sideways {fx}, {fz}"
+        );
         let slid = drape(0.1, obstacle);
         assert!(
             middle_height(&slid) < -1.0,

@@ -394,15 +394,15 @@ impl Contact {
         for c in &d.pairs {
             let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c));
             let len = pair_rows(&d, c, &mut weights);
-            friction.push(&weights[..len], &c.normal, lambda, Vector3::zeros());
+            friction.push(&weights[..len], &c.normal, lambda, Vector3::zeros(), None);
         }
         drop(d);
-        self.push_surface_friction(rod, dt, |rows, n, lambda, moved| {
-            friction.push(rows, n, lambda, moved)
+        self.push_surface_friction(rod, dt, |rows, n, lambda, moved, obstacle| {
+            friction.push(rows, n, lambda, moved, obstacle)
         })
     }
 
-    fn friction_state(&self) -> MutexGuard<'_, Friction> {
+    pub(crate) fn friction_state(&self) -> MutexGuard<'_, Friction> {
         self.friction.lock().unwrap_or_else(|e| e.into_inner())
     }
 
@@ -485,6 +485,15 @@ impl Energy for Contact {
             contact: Some(Contact::summary(self, rod)?),
             ..EnergySummary::default()
         })
+    }
+
+    fn add_obstacle_forces(
+        &self,
+        rod: &Rod,
+        out: &mut Vec<Vector3<Real>>,
+    ) -> Result<(), CoreError> {
+        out.extend(self.obstacle_forces(rod)?);
+        Ok(())
     }
 
     /// The same contact without friction (its frozen data belong to the coarse rod's

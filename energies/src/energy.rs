@@ -170,6 +170,17 @@ pub trait Energy: Send + Sync {
         true
     }
 
+    /// Appends the force (N) the rod exerts on each rigid obstacle this energy holds
+    /// (the contact energy); the default holds none.
+    fn add_obstacle_forces(
+        &self,
+        rod: &Rod,
+        out: &mut Vec<Vector3<Real>>,
+    ) -> Result<(), CoreError> {
+        let _ = (rod, out);
+        Ok(())
+    }
+
     /// The segment of a joined rod this energy acts on alone ([`crate::OnSegment`]);
     /// `None` (the default) for an energy of the whole rod.
     fn segment(&self) -> Option<usize> {

@@ -2,6 +2,8 @@
 //!
 //! * `splinerod run SCENE.toml [--json OUT] [--stats OUT.csv] [--frames DIR [--every K]
 //!   [--camera xy|xz|yz|oblique] [--svg] [--polygon] [--gif OUT.gif]] [--vtk DIR]`
+//!   [--shard K/N]
+//! * `splinerod merge OUT.json SHARD.json…` (the shards of a `--shard` ensemble run)
 //! * `splinerod report [--quick] --out DIR`
 //! * `splinerod bench [--quick] [--json OUT]`
 //!
@@ -28,6 +30,15 @@ struct Cli {
 enum Command {
     /// Runs a scene to its end, prints a summary and optionally writes outputs.
     Run(RunArgs),
+    /// Combines the JSON results of `run --shard K/N` (all N shards) into the result of
+    /// one run of the whole ensemble.
+    Merge {
+        /// Where to write the merged JSON.
+        out: PathBuf,
+        /// The shards' JSON files, any order.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+    },
     /// Measures speed against error on the problems with known answers.
     Report {
         /// A few points per sweep (under 30 s).
@@ -79,6 +90,10 @@ struct RunArgs {
     /// Directory for ParaView files (VTK PolyData and a PVD collection).
     #[arg(long)]
     vtk: Option<PathBuf>,
+    /// Runs only shard K of N of the `[ensemble]` (a contiguous block of members);
+    /// merge the shards' `--json` files with `splinerod merge`.
+    #[arg(long)]
+    shard: Option<String>,
 }
 
 fn main() -> ExitCode {
@@ -104,7 +119,37 @@ fn execute(cli: Cli) -> Result<(), Error> {
             Ok(())
         }
         Command::Bench { quick, json } => bench(quick, json),
+        Command::Merge { out, shards } => merge(&out, &shards),
     }
+}
+
+/// `splinerod merge`: reads every shard, merges, writes `out`.
+fn merge(out: &PathBuf, shards: &[PathBuf]) -> Result<(), Error> {
+    let mut values = Vec::with_capacity(shards.len());
+    for path in shards {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let value = serde_json::from_str(&text).map_err(|e| {
+            let reason = format!("not JSON: {e}");
+            Error::field("merge", path.display(), reason)
+        })?;
+        values.push(value);
+    }
+    let merged = splinerod::run::shard::merge(&values)?;
+    write_json(out, &merged)
+}
+
+/// Writes `value` as pretty JSON to `path`.
+fn write_json(path: &PathBuf, value: &impl serde::Serialize) -> Result<(), Error> {
+    let text = serde_json::to_string_pretty(value)?;
+    std::fs::write(path, text).map_err(|source| Error::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    println!("wrote {}", path.display());
+    Ok(())
 }
 
 #[cfg(feature = "parallel")]
@@ -190,15 +235,16 @@ fn run(args: RunArgs) -> Result<(), Error> {
     for b in boxed.iter_mut() {
         refs.push(b.as_mut());
     }
-    let result = splinerod::run_observed(&scene, &mut refs)?;
+    let result = match &args.shard {
+        Some(text) => {
+            let shard = splinerod::run::shard::Shard::parse(text)?;
+            splinerod::run::runner::run_shard(&scene, &mut refs, shard)?
+        }
+        None => splinerod::run_observed(&scene, &mut refs)?,
+    };
     print!("{}", result.summary());
-    if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&result)?;
-        std::fs::write(path, text).map_err(|source| Error::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        println!("wrote {}", path.display());
+    match &args.json {
+        Some(path) => write_json(path, &result),
+        None => Ok(()),
     }
-    Ok(())
 }

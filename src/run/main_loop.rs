@@ -19,6 +19,7 @@ use crate::world::estimate::EstimateOutput;
 use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
 use splinerod_core::Real;
 use splinerod_energies::EnergySummary;
+use std::ops::Range;
 use std::time::Instant;
 
 /// What a member accumulated besides its final state.
@@ -160,10 +161,18 @@ struct Member {
     tally: Tally,
 }
 
-/// The members of `scene`: the ensemble's, or the scene itself.
-fn build_members(scene: &Scene) -> Result<Vec<(Scene, Simulation)>, Error> {
+/// The members of `scene`: the ensemble's (those of `only`, if given), or the scene
+/// itself.
+fn build_members(
+    scene: &Scene,
+    only: Option<&Range<usize>>,
+) -> Result<Vec<(Scene, Simulation)>, Error> {
     match &scene.ensemble {
-        Some(spec) => (0..spec.count).map(|i| spec.member(scene, i)).collect(),
+        Some(spec) => {
+            let all = 0..spec.count;
+            let range = only.cloned().unwrap_or(all);
+            range.map(|i| spec.member(scene, i)).collect()
+        }
         None => Ok(vec![(scene.clone(), scene.build()?)]),
     }
 }
@@ -198,14 +207,17 @@ fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Resul
     }
 }
 
-/// Runs `scene` to its end, showing every stage of member 0 to `observers`.
+/// Runs `scene` to its end (only the ensemble members of `only`, if given), showing
+/// every stage of its first member to `observers`.
 pub(crate) fn run_scene(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
+    only: Option<&Range<usize>>,
 ) -> Result<RunResult, Error> {
     let mut members = Vec::new();
     let mut sims = Vec::new();
-    for (member_scene, mut sim) in build_members(scene)? {
+    let first_index = only.map_or(0, |r| r.start);
+    for (member_scene, mut sim) in build_members(scene, only)? {
         let mut cuts = CutSchedule::new(&member_scene);
         prepare(&member_scene, &mut sim, &mut cuts)?;
         let mut tally = Tally::new(&member_scene, &sim.system)?;
@@ -267,7 +279,7 @@ pub(crate) fn run_scene(
     }
     let summaries = if scene.ensemble.is_some() {
         let all = members.iter().zip(&ensemble.members).enumerate();
-        all.map(|(i, (m, sim))| summarize(i, &m.scene, sim, &m.tally))
+        all.map(|(i, (m, sim))| summarize(first_index + i, &m.scene, sim, &m.tally))
             .collect::<Result<Vec<_>, _>>()?
     } else {
         Vec::new()

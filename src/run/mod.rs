@@ -9,5 +9,6 @@ pub(crate) mod main_loop;
 pub mod observe;
 pub mod rods;
 pub mod runner;
+pub mod shard;
 pub(crate) mod summary;
 pub(crate) mod twist;

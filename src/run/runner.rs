@@ -5,6 +5,7 @@ use crate::run::ensemble::MemberSummary;
 use crate::run::knot_track::KnotTrack;
 use crate::run::main_loop::Tally;
 use crate::run::observe::{Frame, Observer};
+use crate::run::shard::{Shard, ShardInfo};
 use crate::scene::Scene;
 use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
@@ -38,7 +39,7 @@ pub struct Probe {
 }
 
 /// Solver counters summed over the run.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct SolverTotals {
     /// Newton iterations (numeric factorisations).
     pub newton_iterations: usize,
@@ -177,6 +178,13 @@ pub struct RunResult {
     /// for a one-rod scene (whose rod is the top-level result).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub rods: Vec<crate::run::rods::RodOutput>,
+    /// The force the rod exerts on each `[[obstacles]]` entry at the end, N (penalty and
+    /// friction); absent without obstacles.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub obstacle_forces: Vec<[Real; 3]>,
+    /// For a `--shard` run: which shard of which scene ([`crate::run::shard`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardInfo>,
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
     /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
@@ -210,7 +218,20 @@ pub fn run_observed(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
 ) -> Result<RunResult, Error> {
-    crate::run::main_loop::run_scene(scene, observers)
+    crate::run::main_loop::run_scene(scene, observers, None)
+}
+
+/// Runs shard `shard` of the `[ensemble]` of `scene` (see [`crate::run::shard`]): its
+/// members only, the result recording which.
+pub fn run_shard(
+    scene: &Scene,
+    observers: &mut [&mut dyn Observer],
+    shard: Shard,
+) -> Result<RunResult, Error> {
+    let members = shard.members(scene)?;
+    let mut result = crate::run::main_loop::run_scene(scene, observers, Some(&members))?;
+    result.shard = Some(shard.info(scene, &members));
+    Ok(result)
 }
 
 pub(crate) fn frame<'a>(
@@ -301,6 +322,12 @@ pub(crate) fn finish(
         twist: crate::run::twist::twist(system)?,
         pieces: rod.pieces(),
         rods: crate::run::rods::rods(scene, system)?,
+        obstacle_forces: system
+            .obstacle_forces()?
+            .into_iter()
+            .map(Into::into)
+            .collect(),
+        shard: None,
         control_points_history: tally.history,
         median_step_seconds: if statics { 0.0 } else { median(step_seconds) },
         ensemble: Vec::new(),

@@ -211,6 +211,16 @@ impl RodSystem {
             .try_for_each(|e| e.interaction_points(&self.rod, out))
     }
 
+    /// The force the rod exerts on each rigid obstacle, N, in the order they were given
+    /// ([`Energy::add_obstacle_forces`]); empty without obstacles.
+    pub fn obstacle_forces(&self) -> Result<Vec<Vector3<Real>>, CoreError> {
+        let mut out = Vec::new();
+        for e in self.acting() {
+            e.add_obstacle_forces(&self.rod, &mut out)?;
+        }
+        Ok(out)
+    }
+
     /// The merged [`Energy::summary`] of every acting energy.
     pub fn summary(&self) -> Result<EnergySummary, CoreError> {
         let mut total = EnergySummary::default();

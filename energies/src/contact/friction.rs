@@ -32,6 +32,8 @@ pub(crate) struct Lag {
     /// How far the surface touched moves in the step (a moving obstacle), m: slip is
     /// measured against it.
     pub surface_motion: Vector3<Real>,
+    /// The obstacle touched (`None`: a pair of samples or the floor).
+    pub obstacle: Option<usize>,
 }
 
 /// The lags of the current step and the positions it started from.
@@ -62,6 +64,7 @@ impl Friction {
         normal: &Vector3<Real>,
         lambda: Real,
         surface_motion: Vector3<Real>,
+        obstacle: Option<usize>,
     ) {
         let mut lag = Lag {
             weights: [(0, 0.0); 2 * MAX_ORDER],
@@ -69,6 +72,7 @@ impl Friction {
             tangent: Matrix3::identity() - normal * normal.transpose(),
             lambda,
             surface_motion,
+            obstacle,
         };
         lag.weights[..lag.len].copy_from_slice(&weights[..lag.len]);
         self.lags.push(lag);
@@ -118,6 +122,20 @@ impl Friction {
             let force = u * (mu * lag.lambda / u.norm().max(eps));
             for &(k, w) in &lag.weights[..lag.len] {
                 gradient[k] += force * w;
+            }
+        }
+    }
+
+    /// Adds to `forces[i]` the friction force the rod exerts on obstacle `i` at its
+    /// positions (the reaction to the force of each lag on the rod).
+    pub fn add_obstacle_forces(&self, rod: &Rod, mu: Real, forces: &mut [Vector3<Real>]) {
+        if !self.active(rod) {
+            return;
+        }
+        for lag in &self.lags {
+            if let Some(f) = lag.obstacle.and_then(|i| forces.get_mut(i)) {
+                let u = self.slip(lag, &rod.positions);
+                *f += u * (mu * lag.lambda / u.norm().max(self.eps));
             }
         }
     }

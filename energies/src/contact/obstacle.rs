@@ -241,6 +241,23 @@ impl Contact {
         Ok(())
     }
 
+    /// The force the rod exerts on each obstacle now, N: the reaction to the penalty
+    /// \\(-w\, \phi'(g)\, n\\) at every sample touching it, plus friction's (the lags of
+    /// the step under way, at the current positions).
+    pub fn obstacle_forces(&self, rod: &Rod) -> Result<Vec<Vector3<Real>>, CoreError> {
+        let mut forces = vec![Vector3::zeros(); self.obstacles.len()];
+        self.for_each_obstacle_point(rod, |p| {
+            if let Some(f) = p.obstacle.and_then(|i| forces.get_mut(i)) {
+                *f += p.normal * (p.weight * self.penalty.slope(p.gap));
+            }
+        })?;
+        if self.params.friction > 0.0 {
+            let friction = self.friction_state();
+            friction.add_obstacle_forces(rod, self.params.friction, &mut forces);
+        }
+        Ok(forces)
+    }
+
     /// Number of samples touching an obstacle and the smallest distance of a centre
     /// line from an obstacle over the rod's radius (`None` without such contacts).
     pub(crate) fn obstacle_summary(&self, rod: &Rod) -> Result<(usize, Option<Real>), CoreError> {

@@ -117,7 +117,7 @@ impl Contact {
         &self,
         rod: &Rod,
         dt: Real,
-        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real, Vector3<Real>),
+        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real, Vector3<Real>, Option<usize>),
     ) -> Result<(), CoreError> {
         let mut rows = [(0, 0.0); 2 * MAX_ORDER];
         self.for_each_surface_point(rod, |p| {
@@ -129,7 +129,7 @@ impl Contact {
             let moved = p
                 .obstacle
                 .map_or(Vector3::zeros(), |i| self.motion.step(i, dt));
-            push(&rows[..len], &p.normal, lambda, moved);
+            push(&rows[..len], &p.normal, lambda, moved, p.obstacle);
         })
     }
 }
