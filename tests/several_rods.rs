@@ -82,6 +82,20 @@ fn rods_that_do_not_touch_move_as_they_would_alone() {
             );
         }
     }
+    // Each rod's knots and pin forces, as alone.
+    for (rod, single) in [(&joined.rods[0], &b), (&joined.rods[1], &a)] {
+        assert_eq!(rod.knots.len(), single.knots.len());
+        for (s, t) in rod.knots.iter().zip(&single.knots) {
+            assert!((s - t).abs() < 1e-12, "{}: knot {s} vs {t}", rod.name);
+        }
+        assert_eq!(rod.pin_forces.len(), single.pin_forces.len());
+        for (f, g) in rod.pin_forces.iter().zip(&single.pin_forces) {
+            assert!(
+                (Vector3::from(*f) - Vector3::from(*g)).norm() < 1e-5,
+                "{f:?} {g:?}"
+            );
+        }
+    }
     // One force per [[pins]] entry in file order: a's two pins, then b's.
     assert_eq!(joined.pin_forces.len(), 3);
     for (f, g) in joined.pin_forces[..2].iter().zip(&a.pin_forces) {

@@ -1,6 +1,7 @@
 //! The per-rod results of a `[[rods]]` scene (JSON `rods[i]`): each rod's name, control
-//! points, samples along it and its own energies (kinetic and every energy placed on it;
-//! contact acts between rods and stays in the top-level `energy`).
+//! points, knots, samples along it, its own energies (kinetic and every energy placed on
+//! it; contact acts between rods and stays in the top-level `energy`) and the forces of
+//! its pins.
 
 use crate::run::runner::Samples;
 use crate::{Error, RodSystem, Scene};
@@ -15,14 +16,23 @@ pub struct RodOutput {
     pub name: String,
     /// Its control points now.
     pub control_points: usize,
+    /// Its knot vector now, fractions of its rest length.
+    pub knots: Vec<Real>,
     /// Evenly spaced points along it (`output.samples` of them).
     pub samples: Samples,
     /// Its energies, J, by name (`kinetic` included).
     pub energy: BTreeMap<String, Real>,
+    /// The forces of the `[[pins]]` entries naming it, in file order, N.
+    pub pin_forces: Vec<[Real; 3]>,
 }
 
 /// Every rod's results; empty for a one-rod scene.
-pub fn rods(scene: &Scene, system: &RodSystem) -> Result<Vec<RodOutput>, Error> {
+/// `pin_forces`: one per `[[pins]]` entry, in file order.
+pub fn rods(
+    scene: &Scene,
+    system: &RodSystem,
+    pin_forces: &[[Real; 3]],
+) -> Result<Vec<RodOutput>, Error> {
     let rod = &system.rod;
     let m = scene.output.samples;
     let s: Vec<Real> = (0..m).map(|k| k as Real / (m - 1) as Real).collect();
@@ -37,9 +47,15 @@ pub fn rods(scene: &Scene, system: &RodSystem) -> Result<Vec<RodOutput>, Error> 
         for e in system.energies.iter().filter(|e| e.segment() == Some(k)) {
             *energy.entry(e.name().to_string()).or_insert(0.0) += e.energy(rod);
         }
+        let mine =
+            |p: &&crate::scene::PinSpec| scene.rod_index("", p.rod.as_deref()).ok() == Some(k);
+        let forces = scene.pins.iter().zip(pin_forces).filter(|(p, _)| mine(p));
+        let l = part.material().rest_length;
         out.push(RodOutput {
             name: spec.name.clone().unwrap_or_default(),
             control_points: part.len(),
+            knots: part.basis().knots().iter().map(|t| t / l).collect(),
+            pin_forces: forces.map(|(_, f)| *f).collect(),
             samples: Samples {
                 s: s.clone(),
                 positions,

@@ -303,6 +303,7 @@ pub(crate) fn finish(
     energy.extend(system.energy_breakdown());
     let l = rod.material().rest_length;
     let statics = sim.integrator.solves_equilibrium();
+    let pin_forces = scene_pin_forces(scene, sim);
     Ok(RunResult {
         time: sim.time,
         steps: sim.steps,
@@ -317,11 +318,11 @@ pub(crate) fn finish(
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
         solver: tally.solver,
-        pin_forces: scene_pin_forces(scene, sim),
+        pin_forces: pin_forces.clone(),
         pin_torques: pin_torques(scene, sim)?,
         twist: crate::run::twist::twist(system)?,
         pieces: rod.pieces(),
-        rods: crate::run::rods::rods(scene, system)?,
+        rods: crate::run::rods::rods(scene, system, &pin_forces)?,
         obstacle_forces: system
             .obstacle_forces()?
             .into_iter()
