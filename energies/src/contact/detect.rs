@@ -92,6 +92,8 @@ pub(crate) struct Detector {
     /// bound times the sample spacing.
     lower: Vec<Vector3<Real>>,
     upper: Vec<Vector3<Real>>,
+    /// Speed bound of each non-empty span `k` (index `k`; 0 for empty spans).
+    span_speed: Vec<Real>,
     sweep: BoxSweep,
     breaks: Vec<Real>,
     /// The samples of every segment.
@@ -221,17 +223,18 @@ impl Detector {
     /// Sample positions at the rod's current control points.
     fn place_samples(&mut self, rod: &Rod) {
         let samples = &mut self.samples;
+        let order = samples.order;
         samples.position.clear();
-        for k in 0..samples.s.len() {
-            let first = samples.first[k] as usize;
-            let row = &samples.values[k * samples.order..(k + 1) * samples.order];
-            let p = row
-                .iter()
-                .enumerate()
-                .fold(Vector3::zeros(), |acc, (a, &b)| {
-                    acc + rod.positions[first + a] * b
-                });
-            samples.position.push(p);
+        samples.position.resize(samples.s.len(), Vector3::zeros());
+        let rows = samples.values.chunks_exact(order);
+        for ((p, &first), row) in samples.position.iter_mut().zip(&samples.first).zip(rows) {
+            // The row's control points, sliced once (no bounds check per term).
+            let q = &rod.positions[first as usize..first as usize + order];
+            let mut acc = Vector3::zeros();
+            for (qa, &b) in q.iter().zip(row) {
+                acc += qa * b;
+            }
+            *p = acc;
         }
     }
 
@@ -240,12 +243,18 @@ impl Detector {
         self.pairs.clear();
         self.groups.clear();
         let p = &self.samples.position;
+        // A cheap squared-distance filter, slightly generous so that the exact test
+        // below decides every pair as before (no square root for far samples).
+        let filter = reach * reach * (1.0 + 1e-9);
         for &(a, b) in &self.candidates {
             let start = self.pairs.len();
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
             for i in sa.first..sa.end {
                 for j in sb.first..sb.end {
                     let r = p[i] - p[j];
+                    if r.norm_squared() >= filter {
+                        continue;
+                    }
                     let distance = r.norm();
                     if distance < reach {
                         let normal = r / distance;
@@ -285,6 +294,14 @@ impl Detector {
                 .map(|i| d as Real * (q[i] - q[i - 1]).norm() / (knots[i + d] - knots[i]))
                 .fold(0.0, Real::max)
         };
+        // Each span's bound once (segments are shorter than spans and share them).
+        self.span_speed.clear();
+        self.span_speed.resize(knots.len(), 0.0);
+        for j in d..knots.len().saturating_sub(d + 1) {
+            if knots[j + 1] > knots[j] {
+                self.span_speed[j] = speed(j - d);
+            }
+        }
         // Non-empty spans [knots[k], knots[k + 1]], k = first + d, in order.
         let mut k = d;
         let p = &self.samples.position;
@@ -298,7 +315,7 @@ impl Detector {
             let mut j = k;
             while j + 1 < knots.len() && knots[j] < seg.hi {
                 if knots[j + 1] > knots[j] {
-                    v = v.max(speed(j - d));
+                    v = v.max(self.span_speed[j]);
                 }
                 j += 1;
             }
