@@ -49,7 +49,7 @@ pub enum Error {
     #[error("stopped by an observer: {0}")]
     Stopped(String),
     /// A scene field is out of range; names the field and the value.
-    #[error("scene field `{field}` = {value}: {reason}")]
+    #[error("{} `{field}` = {value}: {reason}", kind_of(.field))]
     InvalidField {
         /// Dotted path of the field, e.g. `rod.linear_density` or `pins[1].at`.
         field: String,
@@ -145,5 +145,17 @@ pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
     match v.iter().try_for_each(|&x| finite.check(x)) {
         Ok(()) => Ok(()),
         Err(reason) => Err(Error::field(field, format!("{v:?}"), reason)),
+    }
+}
+
+/// What an [`Error::InvalidField`] names: a command-line option (`--every`), an input
+/// of `splinerod merge`, or a scene field.
+fn kind_of(field: &str) -> &'static str {
+    if field.starts_with("--") {
+        "option"
+    } else if field.starts_with("merge") {
+        "input"
+    } else {
+        "scene field"
     }
 }

@@ -161,5 +161,5 @@ fn combine(ordered: &[&Value]) -> Result<Value, Error> {
 }
 
 fn shard_error(i: usize, reason: &str) -> Error {
-    Error::field(format!("merge: file {}", i + 1), "given", reason)
+    Error::field("merge", format!("file {}", i + 1), reason)
 }
