@@ -74,6 +74,18 @@ pub fn just_below(x: Real) -> Real {
     }
 }
 
+/// The joined parameter of material point `s` of a segment on `[start, end]`: `start + s`,
+/// or, when another segment `follows` and that reaches the junction, the float just below
+/// it ([`Rod::joined_coordinate`]). The one rule for scenes and rods alike.
+pub fn on_segment(start: Real, end: Real, s: Real, follows: bool) -> Real {
+    let at = start + s;
+    if follows && at >= end {
+        just_below(end)
+    } else {
+        at
+    }
+}
+
 /// Index of the segment holding `s` (the later one on a junction; clamped to the ends).
 fn segment_index(segments: &[Segment], s: Real) -> usize {
     segments
@@ -167,8 +179,7 @@ impl Rod {
     pub fn joined_coordinate(&self, k: usize, s: Real) -> Real {
         match self.segments.get(k) {
             None => s,
-            Some(g) if k + 1 < self.segments.len() && g.start + s >= g.end => just_below(g.end),
-            Some(g) => g.start + s,
+            Some(g) => on_segment(g.start, g.end, s, k + 1 < self.segments.len()),
         }
     }
 

@@ -81,13 +81,9 @@ impl Scene {
             return fraction * self.rod.rest_length;
         }
         let start = self.rods[..k].iter().fold(0.0, |o, r| o + r.rest_length);
-        let end = start + self.rods[k].rest_length;
-        let at = start + fraction * self.rods[k].rest_length;
-        if k + 1 < self.rods.len() && at >= end {
-            splinerod_core::segments::just_below(end)
-        } else {
-            at
-        }
+        let length = self.rods[k].rest_length;
+        let follows = k + 1 < self.rods.len();
+        splinerod_core::segments::on_segment(start, start + length, fraction * length, follows)
     }
 
     /// [`Scene::coordinate`] of an entry naming rod `name` (validated: an unknown name

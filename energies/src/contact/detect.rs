@@ -32,6 +32,7 @@
 use super::assemble::GroupHessian;
 use nalgebra::Vector3;
 use splinerod_core::proximity::{closest_points_between, BoxSweep};
+use splinerod_core::segments::just_below;
 use splinerod_core::{BasisValues, CoreError, Real, Rod};
 
 /// Closest points `C(s)` and `C(t)` of two contact segments closer than the reach.
@@ -114,11 +115,6 @@ pub(crate) struct Detector {
     positions: Vec<Vector3<Real>>,
 }
 
-/// Largest float below `x`.
-fn below(x: Real) -> Real {
-    f64::from_bits(x.to_bits().saturating_sub(1))
-}
-
 impl Detector {
     /// Detects sample pairs closer than `reach` (m) on segments of length `segment` (m)
     /// at least `exclusion` (m) apart along the rod, with samples at most `spacing` (m)
@@ -163,8 +159,8 @@ impl Detector {
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
             let c = closest_points_between(
                 rod,
-                [sa.lo, below(sa.hi).max(sa.lo)],
-                [sb.lo, below(sb.hi).max(sb.lo)],
+                [sa.lo, just_below(sa.hi).max(sa.lo)],
+                [sb.lo, just_below(sb.hi).max(sb.lo)],
             )?;
             if c.distance < reach {
                 self.closest.push(ContactPoint {
