@@ -218,6 +218,17 @@ impl BlockBanded {
         }
     }
 
+    /// The stored upper blocks of row `i`, `(i, i) ..= (i, min(i + bandwidth, n − 1))`,
+    /// mutably: for assembly loops that add a row of blocks without a bounds check per
+    /// block. Adding `B` at index `k ≥ 1` means \\(A_{i,i+k} \mathrel{+}= B\\) and
+    /// \\(A_{i+k,i} \mathrel{+}= B^T\\); the block at `k = 0` must stay symmetric.
+    #[inline]
+    pub fn band_row_mut(&mut self, i: usize) -> &mut [Matrix3<Real>] {
+        let w = self.bandwidth + 1;
+        let len = w.min(self.n.saturating_sub(i));
+        &mut self.blocks[i * w..i * w + len]
+    }
+
     /// Adds \\(g I_3\\) at band position `(i, j)` (and `(j, i)`), `i ≤ j`: a scalar
     /// coupling such as a geometric stiffness. Panics outside the band.
     #[track_caller]

@@ -183,6 +183,13 @@ impl QuadratureTable {
         }
     }
 
+    /// Index of the first non-zero basis function at point `p` (its knot span minus the
+    /// degree).
+    #[inline]
+    pub fn first_function(&self, p: usize) -> usize {
+        self.first[p] as usize
+    }
+
     /// Indices of the points with parameter in `[a, b)` (points are sorted by parameter).
     pub fn points_in(&self, (a, b): (Real, Real)) -> Range<usize> {
         self.s.partition_point(|&s| s < a)..self.s.partition_point(|&s| s < b)

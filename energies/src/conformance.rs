@@ -54,6 +54,9 @@ pub struct Report {
     pub refinement: Real,
     /// Energy and gradient at rest, relative to a stretched state's.
     pub rest: Real,
+    /// Gradient and Hessian of [`Energy::add_gradient_and_hessian`] against the two
+    /// separate calls.
+    pub fused: Real,
 }
 
 /// Tolerances of the checks. Richardson-extrapolated central differences with
@@ -104,6 +107,12 @@ pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report,
             EXACT_TOLERANCE,
             "rigid-motion change",
             &mut report.rigid,
+        )?;
+        measure(
+            fused_error(energy, &rod),
+            EXACT_TOLERANCE,
+            "fused gradient and Hessian change",
+            &mut report.fused,
         )?;
         measure(
             refinement_error(energy, &rod).map_err(setup)?,
@@ -182,6 +191,25 @@ fn gradient_of(energy: &dyn Energy, rod: &Rod) -> Vec<Vector3<Real>> {
     let mut g = vec![Vector3::zeros(); rod.len()];
     energy.add_gradient(rod, &mut g);
     g
+}
+
+/// Largest difference between the fused gradient and Hessian and the separate calls,
+/// relative to the separate ones' largest entries.
+fn fused_error(energy: &dyn Energy, rod: &Rod) -> Real {
+    let n = rod.len();
+    let bandwidth = energy.bandwidth(rod);
+    let (mut g0, mut g1) = (vec![Vector3::zeros(); n], vec![Vector3::zeros(); n]);
+    let (mut h0, mut h1) = (
+        BlockBanded::zeros(n, bandwidth),
+        BlockBanded::zeros(n, bandwidth),
+    );
+    energy.add_gradient(rod, &mut g0);
+    energy.add_hessian(rod, HessianKind::Exact, &mut h0);
+    energy.add_gradient_and_hessian(rod, HessianKind::Exact, &mut g1, &mut h1);
+    let dg = g0.iter().zip(&g1).map(|(a, b)| (a - b).amax());
+    let (d0, d1) = (h0.to_dense(), h1.to_dense());
+    let gradient = dg.fold(0.0, Real::max) / max_norm(&g0).max(Real::MIN_POSITIVE);
+    gradient.max((&d0 - &d1).amax() / d0.amax().max(Real::MIN_POSITIVE))
 }
 
 fn max_norm(v: &[Vector3<Real>]) -> Real {

@@ -95,6 +95,22 @@ pub trait Energy: Send + Sync {
         finite_difference_hessian(self, rod, hessian);
     }
 
+    /// Adds the gradient and the Hessian in one call, as
+    /// [`add_gradient`](Energy::add_gradient) then [`add_hessian`](Energy::add_hessian)
+    /// (the default). Energies whose two share a pass over the quadrature points override
+    /// it; the result must equal the two calls' up to round-off (the conformance harness
+    /// checks it). Newton's method calls this once per iteration.
+    fn add_gradient_and_hessian(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        self.add_gradient(rod, gradient);
+        self.add_hessian(rod, kind, hessian);
+    }
+
     /// Adds the axial tension (force along the centreline, N) this energy carries at the
     /// material coordinates `s` into `out` (same length) and returns true; energies
     /// without a tension (the default) return false.

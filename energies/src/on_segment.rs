@@ -161,6 +161,23 @@ impl Energy for OnSegment {
         });
     }
 
+    fn add_gradient_and_hessian(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        let first = rod.segment_points(self.segment).start;
+        self.with(rod, (), |local| {
+            let (part, h) = (&local.rod, &mut local.hessian);
+            h.reset(part.len(), self.inner.bandwidth(part));
+            let g = &mut gradient[first..first + part.len()];
+            self.inner.add_gradient_and_hessian(part, kind, g, h);
+            hessian.add_shifted(h, first);
+        });
+    }
+
     fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
         let start = self.start(rod);
         let end = start

@@ -89,16 +89,10 @@ struct IncrementalProblem<'a> {
     definite_only: bool,
 }
 
-impl NewtonProblem for IncrementalProblem<'_> {
-    fn apply(&self, rod: &mut Rod, x: &[Vector3<Real>]) {
-        rod.velocities.copy_from_slice(x);
-        for ((q, q0), v) in rod.positions.iter_mut().zip(self.base_q).zip(x) {
-            *q = q0 + v * self.step.beta;
-        }
-    }
-
-    fn residual(&mut self, system: &dyn System, r: &mut [Vector3<Real>]) {
-        let rod = system.rod();
+impl IncrementalProblem<'_> {
+    /// Writes the inertia and damping part of the residual, \\(M((1 + \\beta\\alpha) x -
+    /// \\hat v)\\), into `r`, and zeroes the scratch for the potential's gradient.
+    fn inertia_residual(&mut self, rod: &Rod, r: &mut [Vector3<Real>]) {
         let beta = self.step.beta;
         let tmp = &mut *self.scratch;
         let alpha = self.alpha;
@@ -115,17 +109,19 @@ impl NewtonProblem for IncrementalProblem<'_> {
         }
         rod.mass_matrix().mul_vec3(tmp, r);
         tmp.iter_mut().for_each(|t| *t = Vector3::zeros());
-        system.add_potential_gradient(tmp);
+    }
+
+    /// `r += β g` with the potential's gradient `g` in the scratch.
+    fn add_scaled_gradient(&self, r: &mut [Vector3<Real>]) {
+        let beta = self.step.beta;
         r.iter_mut()
-            .zip(tmp.iter())
+            .zip(self.scratch.iter())
             .for_each(|(r, g)| *r += g * beta);
     }
 
-    fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
-        let rod = system.rod();
+    /// Turns the potential's Hessian `K` in `a` into \\(\\beta^2 K + (1 + \\beta\\alpha) M\\).
+    fn finish_matrix(&self, rod: &Rod, a: &mut BlockBanded) {
         let beta = self.step.beta;
-        a.reset(rod.len(), system.hessian_bandwidth());
-        system.add_potential_hessian(self.hessian, a);
         a.scale(beta * beta);
         if self.alpha.per_point.is_empty() {
             a.add_scaled_scalar(1.0 + beta * self.alpha.uniform, rod.mass_matrix());
@@ -133,6 +129,40 @@ impl NewtonProblem for IncrementalProblem<'_> {
             let alpha = self.alpha;
             a.add_row_scaled_scalar(|i| 1.0 + beta * alpha.at(i), rod.mass_matrix());
         }
+    }
+}
+
+impl NewtonProblem for IncrementalProblem<'_> {
+    fn apply(&self, rod: &mut Rod, x: &[Vector3<Real>]) {
+        rod.velocities.copy_from_slice(x);
+        for ((q, q0), v) in rod.positions.iter_mut().zip(self.base_q).zip(x) {
+            *q = q0 + v * self.step.beta;
+        }
+    }
+
+    fn residual(&mut self, system: &dyn System, r: &mut [Vector3<Real>]) {
+        self.inertia_residual(system.rod(), r);
+        system.add_potential_gradient(self.scratch);
+        self.add_scaled_gradient(r);
+    }
+
+    fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded) {
+        a.reset(system.rod().len(), system.hessian_bandwidth());
+        system.add_potential_hessian(self.hessian, a);
+        self.finish_matrix(system.rod(), a);
+    }
+
+    fn residual_and_matrix(
+        &mut self,
+        system: &dyn System,
+        r: &mut [Vector3<Real>],
+        a: &mut BlockBanded,
+    ) {
+        self.inertia_residual(system.rod(), r);
+        a.reset(system.rod().len(), system.hessian_bandwidth());
+        system.add_potential_gradient_and_hessian(self.hessian, self.scratch, a);
+        self.add_scaled_gradient(r);
+        self.finish_matrix(system.rod(), a);
     }
 
     fn merit(&mut self, system: &dyn System) -> Real {

@@ -71,6 +71,18 @@ pub trait System: Send + Sync {
     fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]);
     /// Adds the Hessian of the potential energy (see [`HessianKind`]).
     fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded);
+    /// Adds the gradient and the Hessian of the potential energy in one call (by default
+    /// the two calls above; a system whose energies share a pass over the rod overrides
+    /// it). Equal to the two calls up to round-off.
+    fn add_potential_gradient_and_hessian(
+        &self,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        self.add_potential_gradient(gradient);
+        self.add_potential_hessian(kind, hessian);
+    }
     /// Block bandwidth of the potential's Hessian (the largest over the energies; the
     /// degree by default). Newton matrices are sized with it.
     fn hessian_bandwidth(&self) -> usize {

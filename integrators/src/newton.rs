@@ -107,6 +107,18 @@ pub trait NewtonProblem {
     fn residual(&mut self, system: &dyn System, r: &mut [Vector3<Real>]);
     /// Writes the Newton matrix at the applied iterate (symmetric positive definite).
     fn matrix(&mut self, system: &dyn System, a: &mut BlockBanded);
+    /// Writes the residual and the Newton matrix at the applied iterate: the two calls
+    /// above (the default), or one pass where the problem can share it. Newton's method
+    /// calls this once per iteration, and [`matrix`](Self::matrix) alone for a retry.
+    fn residual_and_matrix(
+        &mut self,
+        system: &dyn System,
+        r: &mut [Vector3<Real>],
+        a: &mut BlockBanded,
+    ) {
+        self.residual(system, r);
+        self.matrix(system, a);
+    }
     /// The merit \\(\Phi\\) at the applied iterate (used by the line search).
     fn merit(&mut self, system: &dyn System) -> Real;
     /// Right-hand side `c` of pin `pin`'s constraint \\(\sum_k b_k x_{first+k} = c\\).
@@ -198,12 +210,12 @@ pub fn solve(
     problem.apply(system.rod_mut(), x);
     while stats.newton_iterations < params.max_iterations {
         stats.newton_iterations += 1;
-        problem.residual(system, &mut ws.r);
-        let mut slope = newton_direction(problem, system, x, ws, &mut stats)?;
+        problem.residual_and_matrix(system, &mut ws.r, &mut ws.matrix);
+        let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;
         let descends = slope < 0.0;
         if ws.solver.is_indefinite() && !descends && problem.on_not_positive_definite() {
             // The exact step climbs the merit: take the definite one instead.
-            slope = newton_direction(problem, system, x, ws, &mut stats)?;
+            slope = newton_direction(problem, system, x, ws, false, &mut stats)?;
         }
         // A step already below the tolerance is taken whole: its merit change is rounding.
         let mut full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
@@ -236,7 +248,8 @@ pub fn solve(
 }
 
 /// Assembles and factorises `A` (the exact Hessian by Cholesky, else by the indefinite
-/// factorisation if the problem allows, else the problem's definite fallback), then
+/// factorisation if the problem allows, else the problem's definite fallback; with
+/// `assembled`, the problem's matrix is already in `ws.matrix` for the first try), then
 /// solves the KKT system into `ws.dx` and the multipliers. Returns the slope
 /// \(r \cdot \Delta x\) (negative for a descent direction from a feasible iterate, where
 /// \(G\Delta x = 0\) makes it \((r - G^T\mu)\cdot\Delta x\)).
@@ -245,11 +258,12 @@ fn newton_direction(
     system: &dyn System,
     x: &[Vector3<Real>],
     ws: &mut NewtonWorkspace,
+    mut assembled: bool,
     stats: &mut StepStats,
 ) -> Result<Real, IntegratorError> {
     let analyses = ws.solver.analyses();
     let rho = loop {
-        let rho = factor_matrix(problem, system, ws)?;
+        let rho = factor_matrix(problem, system, ws, std::mem::take(&mut assembled))?;
         match ws.constraints.factor(&mut ws.solver) {
             Err(_) if ws.solver.is_indefinite() && problem.on_not_positive_definite() => {}
             result => break result.map(|_| rho)?,
@@ -288,14 +302,17 @@ fn newton_direction(
     Ok(ws.base.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum())
 }
 
-/// Assembles the problem's matrix into `ws.matrix` with the pins' augmentation
-/// \\(\rho G^T G\\) and the point pins eliminated; returns ρ.
+/// Assembles the problem's matrix into `ws.matrix` (unless `assembled`: it is there)
+/// with the pins' augmentation \\(\rho G^T G\\) and the point pins eliminated; returns ρ.
 fn assemble(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
     ws: &mut NewtonWorkspace,
+    assembled: bool,
 ) -> Real {
-    problem.matrix(system, &mut ws.matrix);
+    if !assembled {
+        problem.matrix(system, &mut ws.matrix);
+    }
     let rho = problem.augmentation();
     ws.constraints.add_gram(rho, &mut ws.matrix);
     ws.constraints.points.eliminate_matrix(&mut ws.matrix);
@@ -308,10 +325,11 @@ fn factor_matrix(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
     ws: &mut NewtonWorkspace,
+    mut assembled: bool,
 ) -> Result<Real, IntegratorError> {
     let epoch = system.rod().topology_epoch();
     loop {
-        let rho = assemble(problem, system, ws);
+        let rho = assemble(problem, system, ws, std::mem::take(&mut assembled));
         match ws.solver.factor(&ws.matrix, epoch) {
             Ok(()) => return Ok(rho),
             Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
@@ -346,7 +364,7 @@ pub(crate) fn negative_curvature(
     let n = system.rod().len();
     ws.resize(n, system.pins().len());
     ws.constraints.setup(system.rod(), system.pins())?;
-    assemble(problem, system, ws);
+    assemble(problem, system, ws, false);
     let epoch = system.rod().topology_epoch();
     if ws.solver.factor(&ws.matrix, epoch).is_ok()
         || ws.matrix.has_far_blocks()

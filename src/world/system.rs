@@ -308,6 +308,16 @@ impl System for RodSystem {
             e.add_hessian(&self.rod, kind, hessian);
         }
     }
+    fn add_potential_gradient_and_hessian(
+        &self,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        for e in self.acting() {
+            e.add_gradient_and_hessian(&self.rod, kind, gradient, hessian);
+        }
+    }
     fn hessian_bandwidth(&self) -> usize {
         let d = self.rod.basis().degree();
         self.acting()

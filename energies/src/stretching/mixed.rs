@@ -71,14 +71,13 @@
 //! insertions, and G falls from 46 % to 1.7 % of the strain energy of a wiggly rod
 //! refined from 10 to 201 control points).
 
+use super::table::{Moment, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::bspline::bspline_values;
 use splinerod_core::{BasisValues, BlockBanded, HessianKind, Real, Rod, MAX_DEGREE};
 use std::cell::RefCell;
 
-/// Control points one tension function can touch: the functions of its `d` spans.
-const MAX_WIDTH: usize = 2 * MAX_DEGREE;
 
 /// Stride of the per-span geometric sums: pairs up to `MAX_DEGREE` apart.
 const BAND: usize = MAX_DEGREE + 1;
@@ -223,7 +222,7 @@ impl Stretching {
 
     /// \\(\\sqrt{g_0}\\) at quadrature point `p` (no square root for the default rest state).
     #[inline]
-    fn root_g0(&self, p: usize) -> Real {
+    pub(super) fn root_g0(&self, p: usize) -> Real {
         match self.g0(p) {
             1.0 => 1.0,
             g0 => g0.sqrt(),
@@ -251,6 +250,16 @@ impl Stretching {
     /// \\(\\sum_j (\\hat\\lambda_j + \\tfrac\\rho2 b_j/m_j) b_j = \\sum_j \\tfrac12 (\\lambda_j +
     /// \\hat\\lambda_j) b_j\\)).
     pub(super) fn mixed_energy(&self, rod: &Rod) -> Real {
+        if self.table.matches(rod) {
+            let ea = self.axial_stiffness();
+            let mut energy = 0.0;
+            self.table.for_each(rod, |k| {
+                let hat = self.multiplier(k.index);
+                let stretch = if k.m > 0.0 { ea * k.b / k.m } else { 0.0 };
+                energy += 0.5 * (2.0 * hat + stretch) * k.b;
+            });
+            return energy;
+        }
         self.with_tensions(rod, |t| {
             t.iter()
                 .enumerate()
@@ -262,6 +271,17 @@ impl Stretching {
     /// Gradient of the mixed form, \\(\\int T\\, g_0^{-1/2} b_a' C'\\, ds\\) with the tension
     /// field `T` at each quadrature point.
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        if self.table.matches(rod) {
+            let ea = self.axial_stiffness();
+            self.table.for_each(rod, |k| {
+                let stretch = if k.m > 0.0 { ea * k.b / k.m } else { 0.0 };
+                let tension = self.multiplier(k.index) + stretch;
+                for (g, v) in gradient[k.first..].iter_mut().zip(k.db) {
+                    *g += v * tension;
+                }
+            });
+            return;
+        }
         self.with_tensions(rod, |t| {
             let table = rod.quadrature();
             for p in 0..table.len() {
@@ -280,12 +300,24 @@ impl Stretching {
         });
     }
 
-    /// Hessian of the mixed form (see the module docs).
-    pub(super) fn mixed_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+    /// Hessian of the mixed form (see the module docs), and with `gradient` the gradient
+    /// too, \\(\\sum_k \\lambda_k\\, \\partial b_k/\\partial q_a\\), from the same sweep.
+    pub(super) fn mixed_hessian(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        mut gradient: Option<&mut [Vector3<Real>]>,
+        hessian: &mut BlockBanded,
+    ) {
+        if self.table.matches(rod) {
+            return self.tabulated_derivatives(rod, kind, gradient, hessian);
+        }
         let d = rod.basis().degree();
         // λ of the last d finished tension functions, at j mod d.
         let mut lambda = [0.0; MAX_DEGREE];
         let ea = self.axial_stiffness();
+        // The first quadrature point not yet given its geometric term.
+        let mut cursor = 0;
         self.sweep(rod, |pr| {
             let c = if pr.m > 0.0 { ea / pr.m } else { 0.0 };
             let tension = self.multiplier(pr.index) + c * pr.b;
@@ -293,54 +325,154 @@ impl Stretching {
                 HessianKind::Exact => tension,
                 _ => tension.max(0.0),
             };
-            for a in 0..pr.width {
-                let u = pr.db[a] * c;
-                for b in a..pr.width {
-                    add_any(
-                        hessian,
-                        pr.first + a,
-                        pr.first + b,
-                        &(u * pr.db[b].transpose()),
-                    );
+            let db = &pr.db[..pr.width];
+            if let Some(g) = gradient.as_deref_mut() {
+                for (g, v) in g[pr.first..].iter_mut().zip(db) {
+                    *g += v * tension;
                 }
             }
+            add_outer_products(hessian, pr.first, c, db);
             // Span `pr.index` has all its tension functions (index − d + 1 ..= index).
             if pr.index >= d {
-                self.add_geometric(rod, pr.index, &lambda[..d], hessian);
+                cursor = self.add_geometric(rod, pr.index, cursor, &lambda[..d], hessian);
             }
+        });
+    }
+
+    /// [`Self::mixed_hessian`] from the tabulated integrals ([`super::table`]): per tension
+    /// function, the material term \\(\\tfrac{EA}{m_k} \\partial b_k \\partial b_k^T\\), the
+    /// geometric term \\(\\lambda_k G_k \\otimes I\\) and the gradient \\(\\lambda_k \\partial b_k\\).
+    fn tabulated_derivatives(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        mut gradient: Option<&mut [Vector3<Real>]>,
+        hessian: &mut BlockBanded,
+    ) {
+        let ea = self.axial_stiffness();
+        self.table.for_each(rod, |k| {
+            let c = if k.m > 0.0 { ea / k.m } else { 0.0 };
+            let tension = self.multiplier(k.index) + c * k.b;
+            if let Some(g) = gradient.as_deref_mut() {
+                for (g, v) in g[k.first..].iter_mut().zip(k.db) {
+                    *g += v * tension;
+                }
+            }
+            add_outer_products(hessian, k.first, c, k.db);
+            let geometric = match kind {
+                HessianKind::Exact => tension,
+                _ => tension.max(0.0),
+            };
+            add_scaled_identities(hessian, k, geometric);
         });
     }
 
     /// The geometric term \\(\\int T g_0^{-1/2} b_a' b_c'\\, ds\\; I\\) of knot span `span`,
     /// with \\(T = \\sum_k \\lambda_k \\varphi_k\\) from `lambda` (function `j` at `j mod d`).
-    fn add_geometric(&self, rod: &Rod, span: usize, lambda: &[Real], hessian: &mut BlockBanded) {
-        let (table, knots, d) = (rod.quadrature(), rod.basis().knots(), lambda.len());
-        let points = table.points_in((knots[span], knots[span + 1]));
-        if points.is_empty() {
-            return;
+    /// Spans come in increasing order: the span's points are found from `cursor` on (no
+    /// search), and the point after them is returned as the next cursor.
+    fn add_geometric(
+        &self,
+        rod: &Rod,
+        span: usize,
+        mut cursor: usize,
+        lambda: &[Real],
+        hessian: &mut BlockBanded,
+    ) -> usize {
+        let (table, d) = (rod.quadrature(), lambda.len());
+        let first = span - d;
+        while cursor < table.len() && table.first_function(cursor) < first {
+            cursor += 1;
         }
         let mut sum = [0.0; BAND * BAND];
-        let first = table.point(points.start).first;
-        for p in points {
-            let qp = table.point(p);
+        let mut any = false;
+        while cursor < table.len() && table.first_function(cursor) == first {
+            let qp = table.point(cursor);
             let mut slot = (span + 1) % d;
             let mut tension = 0.0;
             for &phi in qp.lower {
                 tension += lambda[slot] * phi;
                 slot = if slot + 1 == d { 0 } else { slot + 1 };
             }
-            let w = qp.weight * tension / self.root_g0(p);
+            let w = qp.weight * tension / self.root_g0(cursor);
             for (a, &da) in qp.d1.iter().enumerate() {
                 let wa = w * da;
                 for (g, &db) in sum[a * BAND..].iter_mut().zip(&qp.d1[a..]) {
                     *g += wa * db;
                 }
             }
+            (any, cursor) = (true, cursor + 1);
         }
-        for a in 0..=d {
-            for b in a..=d {
-                hessian.add_scalar(first + a, first + b, sum[a * BAND + b - a]);
+        if any {
+            for a in 0..=d {
+                let row = hessian.band_row_mut(first + a);
+                for (block, &g) in row.iter_mut().zip(&sum[a * BAND..a * BAND + d + 1 - a]) {
+                    block[(0, 0)] += g;
+                    block[(1, 1)] += g;
+                    block[(2, 2)] += g;
+                }
             }
+        }
+        cursor
+    }
+}
+
+/// Adds \\(\\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`, `a ≤ b`, into the
+/// band (or block by block where it is narrower, see [`add_any`]).
+#[inline]
+fn add_scaled_identities(hessian: &mut BlockBanded, k: &Moment<'_>, lambda: Real) {
+    let width = k.db.len();
+    let wide = width <= hessian.bandwidth() + 1;
+    for a in 0..width {
+        if wide {
+            let row = hessian.band_row_mut(k.first + a);
+            for (b, block) in (a..width).zip(row.iter_mut()) {
+                let g = lambda * k.entry(a, b);
+                block[(0, 0)] += g;
+                block[(1, 1)] += g;
+                block[(2, 2)] += g;
+            }
+        } else {
+            for b in a..width {
+                let block = Matrix3::identity() * (lambda * k.entry(a, b));
+                add_any(hessian, k.first + a, k.first + b, &block);
+            }
+        }
+    }
+}
+
+/// Adds \\(c\\, v_a v_b^T\\) at blocks `(first + a, first + b)` for every pair `a ≤ b` of
+/// `v`: one tension function's material stiffness. Row by row into the band when it is
+/// wide enough (no per-block bounds check), else block by block (far blocks for a matrix
+/// sized narrower, see [`add_any`]).
+#[inline]
+fn add_outer_products(hessian: &mut BlockBanded, first: usize, c: Real, v: &[Vector3<Real>]) {
+    if v.len() <= hessian.bandwidth() + 1 {
+        for (a, va) in v.iter().enumerate() {
+            let u = va * c;
+            let row = hessian.band_row_mut(first + a);
+            for (block, vb) in row.iter_mut().zip(&v[a..]) {
+                add_rank_one(block, &u, vb);
+            }
+        }
+    } else {
+        for (a, va) in v.iter().enumerate() {
+            let u = va * c;
+            for (b, vb) in v.iter().enumerate().skip(a) {
+                add_any(hessian, first + a, first + b, &(u * vb.transpose()));
+            }
+        }
+    }
+}
+
+/// `block += u vᵀ`, written out (the compiler keeps it in registers; a temporary 3×3
+/// product through nalgebra's operators was measured 2–3 times slower here).
+#[inline(always)]
+fn add_rank_one(block: &mut Matrix3<Real>, u: &Vector3<Real>, v: &Vector3<Real>) {
+    for c in 0..3 {
+        let vc = v[c];
+        for r in 0..3 {
+            block[(r, c)] += u[r] * vc;
         }
     }
 }

@@ -31,6 +31,7 @@
 
 mod mixed;
 mod multipliers;
+mod table;
 
 pub use multipliers::Multipliers;
 
@@ -79,6 +80,8 @@ pub struct Stretching {
     /// multipliers; their penalty then takes the place of `stiffness`.
     pub multipliers: Option<Multipliers>,
     rest: Option<RestMetric>,
+    /// The mixed form's integrals for the rod's current basis ([`table`]).
+    table: table::TensionTable,
 }
 
 /// A rest curve: its basis and control points.
@@ -122,6 +125,7 @@ impl Stretching {
             formulation: StretchFormulation::default(),
             multipliers: None,
             rest: None,
+            table: table::TensionTable::default(),
         })
     }
 
@@ -134,6 +138,7 @@ impl Stretching {
             formulation: StretchFormulation::Mixed,
             multipliers: None,
             rest: None,
+            table: table::TensionTable::default(),
         };
         s.make_inextensible(rod);
         s
@@ -144,6 +149,7 @@ impl Stretching {
     pub fn make_inextensible(&mut self, rod: &Rod) {
         self.formulation = StretchFormulation::Mixed;
         self.multipliers = Some(Multipliers::new(rod));
+        self.tabulate(rod);
     }
 
     /// The stiffness the mixed form's tension uses: `EA`, or an inextensible rod's
@@ -175,6 +181,7 @@ impl Stretching {
         };
         rest.tabulate(rod)?;
         s.rest = Some(rest);
+        s.tabulate(rod);
         Ok(s)
     }
 
@@ -189,6 +196,17 @@ impl Stretching {
         let rest = &self.rest;
         if let Some(m) = &mut self.multipliers {
             m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p]));
+        }
+        self.tabulate(rod);
+    }
+
+    /// Tabulates the mixed form's integrals for `rod` ([`table`]); nothing for the
+    /// pointwise form.
+    fn tabulate(&mut self, rod: &Rod) {
+        if self.formulation == StretchFormulation::Mixed {
+            let mut table = std::mem::take(&mut self.table);
+            table.build(self, rod);
+            self.table = table;
         }
     }
 
@@ -247,6 +265,31 @@ fn rest_scale(g0: Real) -> Real {
     }
 }
 
+impl Stretching {
+    /// One quadrature point's term of the pointwise Hessian, tangent `c1`.
+    #[inline]
+    fn add_point_hessian(
+        &self,
+        qp: &QuadPoint<'_>,
+        c1: &Vector3<Real>,
+        p: usize,
+        kind: HessianKind,
+        hessian: &mut BlockBanded,
+    ) {
+        let h = self.density_hessian(c1, self.g0(p), kind) * qp.weight;
+        debug_assert!(
+            hessian.bandwidth() + 1 >= qp.d1.len(),
+            "band narrower than d"
+        );
+        for (a, &da) in qp.d1.iter().enumerate() {
+            let row = hessian.band_row_mut(qp.first + a);
+            for (block, &db) in row.iter_mut().zip(&qp.d1[a..]) {
+                *block += h * (da * db);
+            }
+        }
+    }
+}
+
 /// \\(C'(s)\\) at a quadrature point.
 #[inline]
 fn tangent(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> Vector3<Real> {
@@ -295,16 +338,32 @@ impl Energy for Stretching {
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
         if self.formulation != StretchFormulation::Pointwise {
-            return self.mixed_hessian(rod, kind, hessian);
+            return self.mixed_hessian(rod, kind, None, hessian);
         }
         for (p, qp) in rod.quadrature().points().enumerate() {
             let c1 = tangent(&qp, &rod.positions);
-            let h = self.density_hessian(&c1, self.g0(p), kind) * qp.weight;
-            for (a, &da) in qp.d1.iter().enumerate() {
-                for (b, &db) in qp.d1.iter().enumerate().skip(a) {
-                    hessian.add_block(qp.first + a, qp.first + b, &(h * (da * db)));
-                }
+            self.add_point_hessian(&qp, &c1, p, kind, hessian);
+        }
+    }
+
+    fn add_gradient_and_hessian(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_hessian(rod, kind, Some(gradient), hessian);
+        }
+        let half = 0.5 * self.stiffness;
+        for (p, qp) in rod.quadrature().points().enumerate() {
+            let (c1, g0) = (tangent(&qp, &rod.positions), self.g0(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * rest_scale(g0));
+            for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
+                *g += f * da;
             }
+            self.add_point_hessian(&qp, &c1, p, kind, hessian);
         }
     }
 
@@ -335,6 +394,13 @@ impl Energy for Stretching {
 
     fn on_knot_change(&mut self, rod: &Rod, _map: &KnotMap) {
         self.follow(rod);
+    }
+
+    fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
+        if !self.table.matches(rod) {
+            self.tabulate(rod);
+        }
+        Ok(())
     }
 
     fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {

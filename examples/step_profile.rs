@@ -1,0 +1,27 @@
+//! The step `splinerod bench` times as `step_us_16` (16-point cable, one Newton
+//! iteration, no line search), repeated, for profilers:
+//! `valgrind --tool=callgrind target/release/examples/step_profile [STEPS]`.
+use splinerod::prelude::*;
+use splinerod::problems::pinned_cable;
+use std::time::Instant;
+
+fn main() -> Result<(), Error> {
+    let steps: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(100_000);
+    let params = NewtonParams {
+        max_iterations: 1,
+        line_search: false,
+        ..NewtonParams::default()
+    };
+    let system = pinned_cable(16, 1.05, 100.0)?;
+    let mut sim = Simulation::new(system, Box::new(ImplicitEuler::new(params)?));
+    let t = Instant::now();
+    for _ in 0..steps {
+        sim.step(1e-3)?;
+    }
+    let us = t.elapsed().as_secs_f64() / steps as Real * 1e6;
+    println!("{steps} steps, {us:.2} µs per step");
+    Ok(())
+}
