@@ -50,7 +50,7 @@ mod surface;
 use crate::{Energy, EnergySummary};
 use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 pub use obstacle::Obstacle;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
@@ -317,7 +317,14 @@ impl Contact {
     fn detected(&self, rod: &Rod) -> Result<MutexGuard<'_, Detector>, CoreError> {
         let mut detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
         let p = &self.params;
-        detector.detect(rod, self.reach(), p.exclusion, [p.segment, p.spacing])?;
+        let every_sample = !self.obstacles.is_empty();
+        detector.detect(
+            rod,
+            self.reach(),
+            p.exclusion,
+            [p.segment, p.spacing],
+            every_sample,
+        )?;
         Ok(detector)
     }
 
@@ -417,6 +424,22 @@ impl Contact {
     fn pair_weight(&self, d: &Detector, pair: &SamplePair) -> Real {
         let w = &d.samples.weight;
         w[pair.a as usize] * w[pair.b as usize] / self.sum_of_radii(d, pair).powi(2)
+    }
+
+    /// The Hessian of a sample pair's penalty with respect to the difference of its
+    /// points, \\(w\\,[\\phi'' n n^T + \\tfrac{\\phi'}{d}(I - n n^T)]\\): the stiffness along
+    /// the normal and, for [`HessianKind::Exact`], the turning of the normal (negative
+    /// semi-definite, since \\(\\phi' \\le 0\\); without it Newton's method converges only
+    /// linearly, at the ratio of the two terms, about \\(|\\phi'|/(d\\,\\phi'')\\)).
+    fn pair_hessian(&self, d: &Detector, pair: &SamplePair, kind: HessianKind) -> Matrix3<Real> {
+        let (weight, gap) = (self.pair_weight(d, pair), self.gap(d, pair));
+        let nn = pair.normal * pair.normal.transpose();
+        let along = nn * (weight * self.penalty.curvature(gap));
+        if kind != HessianKind::Exact {
+            return along;
+        }
+        let turning = weight * self.penalty.slope(gap) / pair.distance;
+        along + (Matrix3::identity() - nn) * turning
     }
 
     /// \\(r_a + r_b\\) of a sample pair.
@@ -545,7 +568,7 @@ impl Energy for Contact {
         self.friction_state().add_gradient(rod, mu, gradient);
     }
 
-    fn add_hessian(&self, rod: &Rod, _kind: HessianKind, hessian: &mut BlockBanded) {
+    fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
         let Ok(mut d) = self.detected(rod) else {
             hessian.scale(Real::NAN);
             return;
@@ -562,12 +585,8 @@ impl Energy for Contact {
                     .flat_map(|c| (0..order).flat_map(move |k| [first(c.a) + k, first(c.b) + k])),
             );
             for c in pairs {
-                let stiffness = self.pair_weight(&d, c) * self.penalty.curvature(self.gap(&d, c));
                 let len = pair_rows(&d, c, &mut weights);
-                local.add(
-                    &weights[..len],
-                    &(c.normal * c.normal.transpose() * stiffness),
-                );
+                local.add(&weights[..len], &self.pair_hessian(&d, c, kind));
             }
             local.finish(hessian);
         }

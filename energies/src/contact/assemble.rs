@@ -9,11 +9,26 @@ use nalgebra::Matrix3;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::{BlockBanded, Real};
 
+/// A symmetric 3×3 block by its six entries `xx, yy, zz, xy, xz, yz`: every block of
+/// the contact Hessian is one (a sum of weights times symmetric matrices), so a third of
+/// the arithmetic of full blocks suffices.
+type SymBlock = [Real; 6];
+
+/// The entries of a symmetric `m`.
+fn entries(m: &Matrix3<Real>) -> SymBlock {
+    [m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 1)], m[(0, 2)], m[(1, 2)]]
+}
+
+/// The full block of `e`.
+fn block(e: &SymBlock) -> Matrix3<Real> {
+    Matrix3::new(e[0], e[3], e[4], e[3], e[1], e[5], e[4], e[5], e[2])
+}
+
 /// Dense symmetric block matrix over the control points of one group (reused).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct GroupHessian {
     index: Vec<usize>,
-    blocks: Vec<Matrix3<Real>>,
+    blocks: Vec<SymBlock>,
     /// Far blocks of every group so far, `(row < col)`, merged by [`Self::flush`].
     far: Vec<(usize, usize, Matrix3<Real>)>,
 }
@@ -27,12 +42,13 @@ impl GroupHessian {
         self.index.dedup();
         let n = self.index.len();
         self.blocks.clear();
-        self.blocks.resize(n * n, Matrix3::zeros());
+        self.blocks.resize(n * n, [0.0; 6]);
     }
 
-    /// Adds `w_i w_j · m` at every pair `(i, j)`, `i ≤ j` in local order, of `weights`
-    /// (control point, weight); every control point must belong to the group.
+    /// Adds `w_i w_j · m` (`m` symmetric) at every pair `(i, j)`, `i ≤ j` in local order,
+    /// of `weights` (control point, weight); every control point must belong to the group.
     pub fn add(&mut self, weights: &[(usize, Real)], m: &Matrix3<Real>) {
+        let m = entries(m);
         let n = self.index.len();
         let mut local = [(0, 0.0); 2 * MAX_ORDER];
         let count = weights.len().min(local.len());
@@ -42,9 +58,12 @@ impl GroupHessian {
         let local = &mut local[..count];
         local.sort_unstable_by_key(|&(a, _)| a);
         for (k, &(a, wa)) in local.iter().enumerate() {
-            let row = m * wa;
+            let row = m.map(|x| x * wa);
             for &(b, wb) in &local[k..] {
-                self.blocks[a * n + b] += row * wb;
+                let target = &mut self.blocks[a * n + b];
+                for (t, r) in target.iter_mut().zip(&row) {
+                    *t += r * wb;
+                }
             }
         }
     }
@@ -55,7 +74,8 @@ impl GroupHessian {
         let n = self.index.len();
         for a in 0..n {
             for b in a..n {
-                let (i, j, block) = (self.index[a], self.index[b], self.blocks[a * n + b]);
+                let (i, j) = (self.index[a], self.index[b]);
+                let block = block(&self.blocks[a * n + b]);
                 if j - i <= hessian.bandwidth() {
                     hessian.add_block(i, j, &block);
                 } else {

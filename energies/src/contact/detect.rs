@@ -26,8 +26,13 @@
 //! curve) are computed on request only, for reporting distances and for refinement.
 //!
 //! The detection is cached on the positions and the basis epoch: the energy, gradient
-//! and Hessian of one Newton iterate detect once. No allocation once the buffers have
-//! grown.
+//! and Hessian of one Newton iterate detect once. Between iterates and steps, a
+//! **Verlet list** ([`Skin`]) spares the broad phase and the far sample pairs: a full
+//! detection lists every sample pair closer than `reach + margin` (margin
+//! [`SKIN`]` · reach`), and until some control point has moved by `margin / 2` since,
+//! a detection re-measures only those pairs — the same pairs closer than the reach as a
+//! full detection would find (possibly listed in another order, which changes sums by
+//! round-off only). No allocation once the buffers have grown.
 
 use super::assemble::GroupHessian;
 use nalgebra::Vector3;
@@ -73,6 +78,17 @@ impl Samples {
     pub fn row(&self, k: usize) -> &[Real] {
         &self.values[k * self.order..(k + 1) * self.order]
     }
+
+    /// Position of sample `k` for control points `q`.
+    #[inline]
+    fn at(&self, k: usize, q: &[Vector3<Real>]) -> Vector3<Real> {
+        let first = self.first[k] as usize;
+        // The row's control points, sliced once (no bounds check per term).
+        let q = &q[first..first + self.order];
+        q.iter()
+            .zip(self.row(k))
+            .fold(Vector3::zeros(), |acc, (qa, &b)| acc + qa * b)
+    }
 }
 
 /// A contact segment: its rest-arclength range and bounding ball.
@@ -92,6 +108,8 @@ pub(crate) struct Detector {
     /// Boxes of the segments' curves: their samples' boxes widened by half the speed
     /// bound times the sample spacing.
     lower: Vec<Vector3<Real>>,
+    /// Per segment: how far its curve may stray from its samples, `V h / 2`.
+    widen: Vec<Real>,
     upper: Vec<Vector3<Real>>,
     /// Speed bound of each non-empty span `k` (index `k`; 0 for empty spans).
     span_speed: Vec<Real>,
@@ -110,25 +128,72 @@ pub(crate) struct Detector {
     /// Closest points of touching candidates (filled by [`Detector::closest`]).
     pub closest: Vec<ContactPoint>,
     closest_done: bool,
+    /// Whether `candidates` are for the exact reach (else for the skin's wider one).
+    candidates_exact: bool,
+    /// Whether every sample's position is current (else only the skin's samples').
+    placed_all: bool,
     layout: Option<(u64, [Real; 2])>,
     cached: Option<(u64, [Real; 4])>,
     positions: Vec<Vector3<Real>>,
+    /// The Verlet list of the last full detection (see [`Skin`]).
+    skin: Skin,
+}
+
+/// A Verlet list: every sample pair of the candidates closer than `reach + margin` when
+/// it was made, with the control points then. While no control point has moved by
+/// `margin / 2` or more (samples are convex combinations of control points, so none of
+/// them has either), every pair closer than `reach` is in the list: a detection only
+/// re-measures the listed pairs, skipping the broad phase and the far sample pairs.
+#[derive(Debug, Clone, Default)]
+struct Skin {
+    /// The detection settings and topology epoch it was made for.
+    key: Option<(u64, [Real; 4])>,
+    margin: Real,
+    reference: Vec<Vector3<Real>>,
+    /// Sample pairs, grouped by candidate segment pair (`near[start..end]`).
+    near: Vec<(u32, u32)>,
+    groups: Vec<(usize, usize)>,
+    /// The samples of `near`, each once, in increasing order.
+    samples: Vec<u32>,
+}
+
+/// Width of the skin, in reaches: a wider skin lists more pairs and is rebuilt less often.
+pub(crate) const SKIN: Real = 0.25;
+
+impl Skin {
+    /// Whether the list still holds every pair within reach at `rod`'s positions.
+    fn holds(&self, rod: &Rod, key: (u64, [Real; 4])) -> bool {
+        let limit = 0.5 * self.margin;
+        self.key == Some(key)
+            && self.reference.len() == rod.positions.len()
+            && rod
+                .positions
+                .iter()
+                .zip(&self.reference)
+                .all(|(q, r)| (q - r).norm_squared() < limit * limit)
+    }
 }
 
 impl Detector {
     /// Detects sample pairs closer than `reach` (m) on segments of length `segment` (m)
     /// at least `exclusion` (m) apart along the rod, with samples at most `spacing` (m)
     /// apart, unless the rod is unchanged since the last call with the same settings.
+    /// With `every_sample`, every sample's position is made current (obstacles visit
+    /// them all); otherwise only those of sample pairs that may be within reach.
     pub fn detect(
         &mut self,
         rod: &Rod,
         reach: Real,
         exclusion: Real,
         [segment, spacing]: [Real; 2],
+        every_sample: bool,
     ) -> Result<(), CoreError> {
         let epoch = rod.topology_epoch();
         let key = (epoch, [reach, exclusion, segment, spacing]);
-        if self.cached == Some(key) && self.positions == rod.positions {
+        if self.cached == Some(key)
+            && self.positions == rod.positions
+            && (self.placed_all || !every_sample)
+        {
             return Ok(());
         }
         self.cached = None;
@@ -137,9 +202,24 @@ impl Detector {
             self.build_segments(rod, segment, spacing)?;
             self.layout = Some((epoch, [segment, spacing]));
         }
-        self.place_samples(rod);
-        self.bound_segments(rod);
-        self.sweep(reach, exclusion);
+        if self.skin.holds(rod, key) {
+            self.placed_all = every_sample;
+            if every_sample {
+                self.place_samples(rod);
+            } else {
+                self.place_skin_samples(rod);
+            }
+        } else {
+            let margin = SKIN * reach;
+            self.place_samples(rod);
+            self.placed_all = true;
+            self.bound_segments(rod);
+            self.sweep(reach + margin, exclusion);
+            self.candidates_exact = false;
+            self.list_near_samples(reach + margin);
+            self.skin.reference.clone_from(&rod.positions);
+            (self.skin.key, self.skin.margin) = (Some(key), margin);
+        }
         self.near_samples(reach);
         self.closest.clear();
         self.closest_done = false;
@@ -154,8 +234,22 @@ impl Detector {
         if self.closest_done {
             return Ok(());
         }
+        if !self.candidates_exact {
+            // The skin's candidates are for a wider reach: the exact ones.
+            if !self.placed_all {
+                self.place_samples(rod);
+                self.placed_all = true;
+            }
+            let exclusion = self.skin.key.map_or(0.0, |(_, settings)| settings[1]);
+            self.bound_segments(rod);
+            self.sweep(reach, exclusion);
+            self.candidates_exact = true;
+        }
         self.closest.clear();
         for &(a, b) in &self.candidates {
+            if !self.samples_within(a as usize, b as usize, reach) {
+                continue;
+            }
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
             let c = closest_points_between(
                 rod,
@@ -219,52 +313,91 @@ impl Detector {
     /// Sample positions at the rod's current control points.
     fn place_samples(&mut self, rod: &Rod) {
         let samples = &mut self.samples;
-        let order = samples.order;
         samples.position.clear();
         samples.position.resize(samples.s.len(), Vector3::zeros());
-        let rows = samples.values.chunks_exact(order);
-        for ((p, &first), row) in samples.position.iter_mut().zip(&samples.first).zip(rows) {
-            // The row's control points, sliced once (no bounds check per term).
-            let q = &rod.positions[first as usize..first as usize + order];
-            let mut acc = Vector3::zeros();
-            for (qa, &b) in q.iter().zip(row) {
-                acc += qa * b;
-            }
-            *p = acc;
+        for k in 0..samples.s.len() {
+            samples.position[k] = samples.at(k, &rod.positions);
         }
     }
 
-    /// Sample pairs of the candidate segments closer than `reach`.
+    /// Positions of the skin's samples only.
+    fn place_skin_samples(&mut self, rod: &Rod) {
+        let samples = &mut self.samples;
+        for &k in &self.skin.samples {
+            let k = k as usize;
+            samples.position[k] = samples.at(k, &rod.positions);
+        }
+    }
+
+    /// Whether two segments' curves may come closer than `reach`: some pair of their
+    /// samples is closer than `reach` plus how far each curve strays from its samples
+    /// (else the closest points' distance is at least `reach`, and the closest-point
+    /// iteration is skipped).
+    fn samples_within(&self, a: usize, b: usize, reach: Real) -> bool {
+        let (sa, sb) = (&self.segments[a], &self.segments[b]);
+        let bound = reach + self.widen[a] + self.widen[b];
+        let p = &self.samples.position;
+        let bound2 = bound * bound * (1.0 + 1e-9);
+        (sa.first..sa.end)
+            .any(|i| (sb.first..sb.end).any(|j| (p[i] - p[j]).norm_squared() < bound2))
+    }
+
+    /// The skin's list: sample pairs of the candidate segments closer than `wide`.
+    fn list_near_samples(&mut self, wide: Real) {
+        let skin = &mut self.skin;
+        skin.near.clear();
+        skin.groups.clear();
+        let p = &self.samples.position;
+        let filter = wide * wide * (1.0 + 1e-9);
+        for &(a, b) in &self.candidates {
+            let start = skin.near.len();
+            let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
+            for i in sa.first..sa.end {
+                for j in sb.first..sb.end {
+                    if (p[i] - p[j]).norm_squared() < filter {
+                        skin.near.push((i as u32, j as u32));
+                    }
+                }
+            }
+            if skin.near.len() > start {
+                skin.groups.push((start, skin.near.len()));
+            }
+        }
+        skin.samples.clear();
+        skin.samples
+            .extend(skin.near.iter().flat_map(|&(i, j)| [i, j]));
+        skin.samples.sort_unstable();
+        skin.samples.dedup();
+    }
+
+    /// Sample pairs of the skin's list closer than `reach`, grouped as listed.
     fn near_samples(&mut self, reach: Real) {
         self.pairs.clear();
         self.groups.clear();
         let p = &self.samples.position;
         // A cheap squared-distance filter, slightly generous so that the exact test
-        // below decides every pair as before (no square root for far samples).
+        // below decides every pair (no square root for far samples).
         let filter = reach * reach * (1.0 + 1e-9);
-        for &(a, b) in &self.candidates {
-            let start = self.pairs.len();
-            let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
-            for i in sa.first..sa.end {
-                for j in sb.first..sb.end {
-                    let r = p[i] - p[j];
-                    if r.norm_squared() >= filter {
-                        continue;
-                    }
-                    let distance = r.norm();
-                    if distance < reach {
-                        let normal = r / distance;
-                        self.pairs.push(SamplePair {
-                            a: i as u32,
-                            b: j as u32,
-                            distance,
-                            normal,
-                        });
-                    }
+        for &(start, end) in &self.skin.groups {
+            let first = self.pairs.len();
+            for &(i, j) in &self.skin.near[start..end] {
+                let r = p[i as usize] - p[j as usize];
+                if r.norm_squared() >= filter {
+                    continue;
+                }
+                let distance = r.norm();
+                if distance < reach {
+                    let normal = r / distance;
+                    self.pairs.push(SamplePair {
+                        a: i,
+                        b: j,
+                        distance,
+                        normal,
+                    });
                 }
             }
-            if self.pairs.len() > start {
-                self.groups.push((start, self.pairs.len()));
+            if self.pairs.len() > first {
+                self.groups.push((first, self.pairs.len()));
             }
         }
     }
@@ -302,6 +435,7 @@ impl Detector {
         let mut k = d;
         let p = &self.samples.position;
         self.lower.clear();
+        self.widen.clear();
         self.upper.clear();
         for seg in &self.segments {
             while knots[k + 1] <= seg.lo {
@@ -325,6 +459,7 @@ impl Detector {
                 |(lo, hi), x| (lo.inf(x), hi.sup(x)),
             );
             self.lower.push(lo - widen);
+            self.widen.push(0.5 * v * h);
             self.upper.push(hi + widen);
         }
     }
