@@ -26,6 +26,7 @@ fn quick_bench_reports_every_key() {
         "threads",
         "bytes_per_cp",
         "stiff_catenary_settle_s",
+        "knot_step_us",
     ] {
         let v = json[key].as_f64().unwrap_or(f64::NAN);
         assert!(v.is_finite() && v > 0.0, "{key} = {v}");

@@ -71,7 +71,7 @@ pub(crate) fn for_each_rhs(
 
 /// Inverse of a lower triangular 3×3 matrix with a non-zero diagonal (forward
 /// substitution written out).
-fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
+pub(crate) fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
     let (a, b, c) = (1.0 / l[(0, 0)], 1.0 / l[(1, 1)], 1.0 / l[(2, 2)]);
     let m10 = -l[(1, 0)] * a * b;
     let m21 = -l[(2, 1)] * b * c;

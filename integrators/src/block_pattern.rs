@@ -54,6 +54,21 @@ impl BlockShape {
     pub fn has_far(&self) -> bool {
         !self.far.is_empty()
     }
+
+    /// Number of block rows.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Block bandwidth.
+    pub fn bw(&self) -> usize {
+        self.bw
+    }
+
+    /// Distinct far block positions `(col, row)`, sorted column-major.
+    pub fn far(&self) -> &[(usize, usize)] {
+        &self.far
+    }
 }
 
 /// A [`BlockShape`] with the per-column index of its far blocks: the map from blocks

@@ -29,6 +29,7 @@ mod banded_cholesky;
 pub mod banded_ldlt;
 mod bdf2;
 mod block_pattern;
+pub mod block_sparse;
 pub mod conformance;
 mod error;
 mod implicit_euler;

@@ -10,6 +10,7 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 use splinerod_core::{BlockBanded, Real};
+use splinerod_integrators::block_sparse::BlockSparseCholesky;
 use splinerod_integrators::linear::{LinearSolver, SparseCholesky};
 use splinerod_integrators::{BandedCholesky, IntegratorError, LinearSolverKind};
 
@@ -192,8 +193,40 @@ fn a_non_definite_matrix_with_far_blocks_is_reported() {
     );
 }
 
+/// The two sparse factorisations: faer's scalar one and the block one the Newton
+/// solves use.
+trait Sparse {
+    fn factor(&mut self, a: &BlockBanded, epoch: u64) -> Result<bool, IntegratorError>;
+    fn solve_in_place(&mut self, x: &mut [Real]) -> Result<(), IntegratorError>;
+    fn analyses(&self) -> usize;
+}
+
+impl Sparse for SparseCholesky {
+    fn factor(&mut self, a: &BlockBanded, epoch: u64) -> Result<bool, IntegratorError> {
+        SparseCholesky::factor(self, a, epoch)
+    }
+    fn solve_in_place(&mut self, x: &mut [Real]) -> Result<(), IntegratorError> {
+        SparseCholesky::solve_in_place(self, x)
+    }
+    fn analyses(&self) -> usize {
+        SparseCholesky::analyses(self)
+    }
+}
+
+impl Sparse for BlockSparseCholesky {
+    fn factor(&mut self, a: &BlockBanded, epoch: u64) -> Result<bool, IntegratorError> {
+        BlockSparseCholesky::factor(self, a, epoch)
+    }
+    fn solve_in_place(&mut self, x: &mut [Real]) -> Result<(), IntegratorError> {
+        BlockSparseCholesky::solve_in_place(self, x)
+    }
+    fn analyses(&self) -> usize {
+        BlockSparseCholesky::analyses(self)
+    }
+}
+
 /// Factors `a` and checks the solve; returns whether a symbolic analysis ran.
-fn factor_checked(solver: &mut SparseCholesky, a: &BlockBanded, epoch: u64) -> bool {
+fn factor_checked(solver: &mut dyn Sparse, a: &BlockBanded, epoch: u64) -> bool {
     let analysed = solver.factor(a, epoch).unwrap();
     let b = rhs(3 * a.dim(), 1, &mut Rng(11));
     let mut x = b.clone();
@@ -205,42 +238,43 @@ fn factor_checked(solver: &mut SparseCholesky, a: &BlockBanded, epoch: u64) -> b
 
 #[test]
 fn re_analysis_happens_exactly_when_the_far_pattern_changes() {
+    re_analysis_follows_the_far_pattern(&mut SparseCholesky::new());
+    re_analysis_follows_the_far_pattern(&mut BlockSparseCholesky::new());
+}
+
+fn re_analysis_follows_the_far_pattern(solver: &mut dyn Sparse) {
     let mut rng = Rng(0x1234_5678);
     let band = random_band(30, 3, &mut rng);
-    let mut solver = SparseCholesky::new();
-    assert!(factor_checked(&mut solver, &band, 0), "first factorisation");
+    assert!(factor_checked(solver, &band, 0), "first factorisation");
     let mut scaled = band.clone();
     scaled.scale(2.0);
-    assert!(!factor_checked(&mut solver, &scaled, 0), "band values only");
+    assert!(!factor_checked(solver, &scaled, 0), "band values only");
 
     let coupling = Matrix3::from_diagonal_element(0.5);
     let mut contact = band.clone();
     contact.add_coupling(1, 20, &coupling);
     contact.add_coupling(25, 4, &coupling);
-    assert!(
-        factor_checked(&mut solver, &contact, 0),
-        "far pattern appears"
-    );
+    assert!(factor_checked(solver, &contact, 0), "far pattern appears");
     let mut values = contact.clone();
     values.far_blocks_mut()[0].block *= 3.0;
     values.add_coupling(2, 2, &coupling);
-    assert!(!factor_checked(&mut solver, &values, 0), "values only");
+    assert!(!factor_checked(solver, &values, 0), "values only");
 
     // Same positions, other order, other duplicate counts.
     let mut reordered = band.clone();
     reordered.add_coupling(4, 25, &(coupling * 0.5));
     reordered.add_coupling(20, 1, &coupling);
     reordered.add_coupling(4, 25, &(coupling * 0.5));
-    assert!(!factor_checked(&mut solver, &reordered, 0), "duplicates");
+    assert!(!factor_checked(solver, &reordered, 0), "duplicates");
     assert_eq!(reordered.to_dense(), contact.to_dense());
 
     let mut more = contact.clone();
     more.add_coupling(0, 29, &coupling);
-    assert!(factor_checked(&mut solver, &more, 0), "a new position");
-    assert!(factor_checked(&mut solver, &contact, 0), "a position gone");
-    assert!(factor_checked(&mut solver, &contact, 1), "a new epoch");
-    assert!(factor_checked(&mut solver, &band, 1), "contact released");
-    assert!(!factor_checked(&mut solver, &band, 1), "nothing changed");
+    assert!(factor_checked(solver, &more, 0), "a new position");
+    assert!(factor_checked(solver, &contact, 0), "a position gone");
+    assert!(factor_checked(solver, &contact, 1), "a new epoch");
+    assert!(factor_checked(solver, &band, 1), "contact released");
+    assert!(!factor_checked(solver, &band, 1), "nothing changed");
     assert_eq!(solver.analyses(), 6);
 }
 
@@ -255,4 +289,48 @@ fn the_linear_solver_counts_analyses_of_far_blocks_for_either_kind() {
         }
         assert_eq!(solver.analyses(), 1, "{kind:?}");
     }
+}
+
+#[test]
+fn the_block_factorisation_agrees_with_faer_on_random_contact_patterns() {
+    let mut rng = Rng(0xdead_beef);
+    for (n, bw, loops) in [(12, 2, 1), (40, 3, 4), (80, 5, 6), (300, 3, 10)] {
+        let mut a = random_band(n, bw, &mut rng);
+        // Disjoint groups (overlapping ones would add unsymmetric diagonal blocks): one
+        // in each half of the rod.
+        let half = (n / 2 - 4) as Real;
+        for k in 0..loops {
+            let g = ((rng.next() + 1.0) * 0.5 * half) as usize;
+            let h = n / 2 + ((rng.next() + 1.0) * 0.5 * half) as usize;
+            add_rank_one(&mut a, [g, h], 1.5 + rng.next(), k % 2 == 1, &mut rng);
+        }
+        let b = rhs(3 * n, 2, &mut rng);
+        let (mut x, mut y) = (b.clone(), b.clone());
+        let mut faer = SparseCholesky::new();
+        faer.factor(&a, 0).unwrap();
+        faer.solve_in_place(&mut x).unwrap();
+        let mut block = BlockSparseCholesky::new();
+        block.factor(&a, 0).unwrap();
+        block.solve_in_place(&mut y).unwrap();
+        let scale = x.iter().fold(0.0, |m: Real, v| m.max(v.abs()));
+        let worst = x
+            .iter()
+            .zip(&y)
+            .fold(0.0, |m: Real, (p, q)| m.max((p - q).abs()));
+        assert!(worst <= 1e-12 * scale, "n = {n}: {worst:e}");
+        assert!(dense_error(&a, &b, &y) < 1e-10, "n = {n}");
+    }
+}
+
+#[test]
+fn the_block_factorisation_reports_an_indefinite_matrix() {
+    let mut a = contact_matrix(&mut Rng(6));
+    a.add_coupling(1, 25, &Matrix3::from_diagonal_element(1e6));
+    let mut block = BlockSparseCholesky::new();
+    let err = block.factor(&a, 0).unwrap_err();
+    assert!(
+        matches!(err, IntegratorError::NotPositiveDefinite { .. }),
+        "{err}"
+    );
+    assert!(block.solve_in_place(&mut [0.0; 90]).is_err());
 }

@@ -11,9 +11,11 @@
 //! * wall time to settle the stiff (EA = 10⁴ N) catenary, released straight, to within
 //!   2.2·10⁻⁵ m of its equilibrium (the accuracy lumped peers reach with 80 elements);
 //! * the cost of the tolerance-driven adapt stage ([`crate::bench::adapt`]);
-//! * the cost of several rods in one system ([`crate::bench::world`]).
+//! * the cost of several rods in one system ([`crate::bench::world`]);
+//! * the median step of the knot-tying scene, contact included ([`crate::bench::knot`]).
 
 pub mod adapt;
+pub mod knot;
 pub mod twist;
 pub mod world;
 
@@ -38,6 +40,9 @@ pub struct BenchResult {
     /// Median step of 8 independent 16-point cables in one system over 8 times one
     /// cable's ([`crate::bench::world`]).
     pub world_overhead_8: Real,
+    /// Median step of `knot_tying_adaptive.toml` over its first 0.5 s, µs
+    /// ([`crate::bench::knot`]).
+    pub knot_step_us: Real,
     /// Median static Newton iteration, 16 control points, µs.
     pub static_newton_us_16: Real,
     /// Median step time per control point, ns, by size.
@@ -247,6 +252,7 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         step_us_16_bending,
         step_us_16_twist,
         world_overhead_8: crate::bench::world::world_overhead(8, scale(4_000, 400))?,
+        knot_step_us: crate::bench::knot::knot_step_seconds()? * 1e6,
         static_newton_us_16,
         per_cp_ns,
         per_cp_flatness: hi / lo,
