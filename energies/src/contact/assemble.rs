@@ -16,7 +16,14 @@ type SymBlock = [Real; 6];
 
 /// The entries of a symmetric `m`.
 fn entries(m: &Matrix3<Real>) -> SymBlock {
-    [m[(0, 0)], m[(1, 1)], m[(2, 2)], m[(0, 1)], m[(0, 2)], m[(1, 2)]]
+    [
+        m[(0, 0)],
+        m[(1, 1)],
+        m[(2, 2)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(1, 2)],
+    ]
 }
 
 /// The full block of `e`.

@@ -78,7 +78,6 @@ use splinerod_core::bspline::bspline_values;
 use splinerod_core::{BasisValues, BlockBanded, HessianKind, Real, Rod, MAX_DEGREE};
 use std::cell::RefCell;
 
-
 /// Stride of the per-span geometric sums: pairs up to `MAX_DEGREE` apart.
 const BAND: usize = MAX_DEGREE + 1;
 
