@@ -45,6 +45,7 @@ pub mod detect;
 mod friction;
 pub mod obstacle;
 mod penalty;
+mod skin;
 mod surface;
 
 use crate::{Energy, EnergySummary};

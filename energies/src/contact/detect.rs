@@ -35,6 +35,7 @@
 //! round-off only). No allocation once the buffers have grown.
 
 use super::assemble::GroupHessian;
+use super::skin::{Skin, SKIN};
 use nalgebra::Vector3;
 use splinerod_core::proximity::{closest_points_between, BoxSweep};
 use splinerod_core::segments::just_below;
@@ -91,14 +92,14 @@ impl Samples {
     }
 }
 
-/// A contact segment: its rest-arclength range and bounding ball.
+/// A contact segment: its rest-arclength range and its samples.
 #[derive(Debug, Clone, Copy, Default)]
-struct Segment {
-    lo: Real,
-    hi: Real,
+pub(crate) struct Segment {
+    pub lo: Real,
+    pub hi: Real,
     /// Its samples: `samples[first..end]`.
-    first: usize,
-    end: usize,
+    pub first: usize,
+    pub end: usize,
 }
 
 /// Buffers and cache of the detection.
@@ -123,8 +124,10 @@ pub(crate) struct Detector {
     pub groups: Vec<(usize, usize)>,
     /// Scratch for assembling one group's Hessian.
     pub group_hessian: GroupHessian,
-    /// Candidate segment pairs of the last detection (broad phase output).
+    /// Candidate segment pairs of the last broad phase.
     candidates: Vec<(u32, u32)>,
+    /// Segment pairs the last closest-point search examined.
+    examined: Vec<(u32, u32)>,
     /// Closest points of touching candidates (filled by [`Detector::closest`]).
     pub closest: Vec<ContactPoint>,
     closest_done: bool,
@@ -137,41 +140,6 @@ pub(crate) struct Detector {
     positions: Vec<Vector3<Real>>,
     /// The Verlet list of the last full detection (see [`Skin`]).
     skin: Skin,
-}
-
-/// A Verlet list: every sample pair of the candidates closer than `reach + margin` when
-/// it was made, with the control points then. While no control point has moved by
-/// `margin / 2` or more (samples are convex combinations of control points, so none of
-/// them has either), every pair closer than `reach` is in the list: a detection only
-/// re-measures the listed pairs, skipping the broad phase and the far sample pairs.
-#[derive(Debug, Clone, Default)]
-struct Skin {
-    /// The detection settings and topology epoch it was made for.
-    key: Option<(u64, [Real; 4])>,
-    margin: Real,
-    reference: Vec<Vector3<Real>>,
-    /// Sample pairs, grouped by candidate segment pair (`near[start..end]`).
-    near: Vec<(u32, u32)>,
-    groups: Vec<(usize, usize)>,
-    /// The samples of `near`, each once, in increasing order.
-    samples: Vec<u32>,
-}
-
-/// Width of the skin, in reaches: a wider skin lists more pairs and is rebuilt less often.
-pub(crate) const SKIN: Real = 0.25;
-
-impl Skin {
-    /// Whether the list still holds every pair within reach at `rod`'s positions.
-    fn holds(&self, rod: &Rod, key: (u64, [Real; 4])) -> bool {
-        let limit = 0.5 * self.margin;
-        self.key == Some(key)
-            && self.reference.len() == rod.positions.len()
-            && rod
-                .positions
-                .iter()
-                .zip(&self.reference)
-                .all(|(q, r)| (q - r).norm_squared() < limit * limit)
-    }
 }
 
 impl Detector {
@@ -216,11 +184,21 @@ impl Detector {
             self.bound_segments(rod);
             self.sweep(reach + margin, exclusion);
             self.candidates_exact = false;
-            self.list_near_samples(reach + margin);
+            let wide = reach + margin;
+            let p = &self.samples.position;
+            self.skin.build(
+                &self.candidates,
+                &self.segments,
+                p,
+                wide,
+                self.samples.s.len(),
+            );
             self.skin.reference.clone_from(&rod.positions);
             (self.skin.key, self.skin.margin) = (Some(key), margin);
         }
-        self.near_samples(reach);
+        let p = &self.samples.position;
+        self.skin
+            .within(p, reach, &mut self.pairs, &mut self.groups);
         self.closest.clear();
         self.closest_done = false;
         self.positions.clone_from(&rod.positions);
@@ -230,26 +208,44 @@ impl Detector {
 
     /// Fills [`closest`](Self::closest) with the closest points of every candidate
     /// segment pair closer than `reach` (after a [`detect`](Self::detect) at this state).
+    ///
+    /// The segment pairs examined are those with a sample pair closer than `reach`
+    /// plus how far each curve strays from its samples (`V h / 2`): no other pair's
+    /// curves come within `reach`. They are found in the skin's list when the skin
+    /// certifies it holds them all ([`Skin::covers`]), else by a broad phase at `reach`.
     pub fn closest(&mut self, rod: &Rod, reach: Real) -> Result<(), CoreError> {
         if self.closest_done {
             return Ok(());
         }
-        if !self.candidates_exact {
-            // The skin's candidates are for a wider reach: the exact ones.
-            if !self.placed_all {
-                self.place_samples(rod);
-                self.placed_all = true;
+        self.segment_widths(rod);
+        let widest = self.widen.iter().copied().fold(0.0, Real::max);
+        self.examined.clear();
+        if self.skin.covers(rod, 2.0 * widest) {
+            let p = &self.samples.position;
+            let widen = &self.widen;
+            let bound = |a: usize, b: usize| reach + widen[a] + widen[b];
+            self.skin.pairs_within(p, bound, &mut self.examined);
+        } else {
+            if !self.candidates_exact {
+                // The skin's candidates are for a wider reach: the exact ones.
+                if !self.placed_all {
+                    self.place_samples(rod);
+                    self.placed_all = true;
+                }
+                let exclusion = self.skin.key.map_or(0.0, |(_, settings)| settings[1]);
+                self.bound_segments(rod);
+                self.sweep(reach, exclusion);
+                self.candidates_exact = true;
             }
-            let exclusion = self.skin.key.map_or(0.0, |(_, settings)| settings[1]);
-            self.bound_segments(rod);
-            self.sweep(reach, exclusion);
-            self.candidates_exact = true;
+            for k in 0..self.candidates.len() {
+                let (a, b) = self.candidates[k];
+                if self.samples_within(a as usize, b as usize, reach) {
+                    self.examined.push((a, b));
+                }
+            }
         }
         self.closest.clear();
-        for &(a, b) in &self.candidates {
-            if !self.samples_within(a as usize, b as usize, reach) {
-                continue;
-            }
+        for &(a, b) in &self.examined {
             let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
             let c = closest_points_between(
                 rod,
@@ -342,66 +338,6 @@ impl Detector {
             .any(|i| (sb.first..sb.end).any(|j| (p[i] - p[j]).norm_squared() < bound2))
     }
 
-    /// The skin's list: sample pairs of the candidate segments closer than `wide`.
-    fn list_near_samples(&mut self, wide: Real) {
-        let skin = &mut self.skin;
-        skin.near.clear();
-        skin.groups.clear();
-        let p = &self.samples.position;
-        let filter = wide * wide * (1.0 + 1e-9);
-        for &(a, b) in &self.candidates {
-            let start = skin.near.len();
-            let (sa, sb) = (&self.segments[a as usize], &self.segments[b as usize]);
-            for i in sa.first..sa.end {
-                for j in sb.first..sb.end {
-                    if (p[i] - p[j]).norm_squared() < filter {
-                        skin.near.push((i as u32, j as u32));
-                    }
-                }
-            }
-            if skin.near.len() > start {
-                skin.groups.push((start, skin.near.len()));
-            }
-        }
-        skin.samples.clear();
-        skin.samples
-            .extend(skin.near.iter().flat_map(|&(i, j)| [i, j]));
-        skin.samples.sort_unstable();
-        skin.samples.dedup();
-    }
-
-    /// Sample pairs of the skin's list closer than `reach`, grouped as listed.
-    fn near_samples(&mut self, reach: Real) {
-        self.pairs.clear();
-        self.groups.clear();
-        let p = &self.samples.position;
-        // A cheap squared-distance filter, slightly generous so that the exact test
-        // below decides every pair (no square root for far samples).
-        let filter = reach * reach * (1.0 + 1e-9);
-        for &(start, end) in &self.skin.groups {
-            let first = self.pairs.len();
-            for &(i, j) in &self.skin.near[start..end] {
-                let r = p[i as usize] - p[j as usize];
-                if r.norm_squared() >= filter {
-                    continue;
-                }
-                let distance = r.norm();
-                if distance < reach {
-                    let normal = r / distance;
-                    self.pairs.push(SamplePair {
-                        a: i,
-                        b: j,
-                        distance,
-                        normal,
-                    });
-                }
-            }
-            if self.pairs.len() > first {
-                self.groups.push((first, self.pairs.len()));
-            }
-        }
-    }
-
     /// The domain's ends and the cuts, in order.
     fn piece_breaks(&mut self, rod: &Rod) {
         let (start, end) = rod.basis().domain();
@@ -411,10 +347,10 @@ impl Detector {
         self.breaks.push(end);
     }
 
-    /// Boxes of the segments: the box of the samples widened by `V h / 2`, `V` the speed
-    /// bound of the spans the segment meets and `h` its sample spacing (the curve between
+    /// Per segment, how far its curve may stray from its samples, `V h / 2`: `V` the
+    /// speed bound of the spans it meets and `h` its sample spacing (the curve between
     /// two samples, or between an end and its sample, stays that close to a sample).
-    fn bound_segments(&mut self, rod: &Rod) {
+    fn segment_widths(&mut self, rod: &Rod) {
         let d = rod.basis().degree();
         let knots = rod.basis().knots();
         let q = &rod.positions;
@@ -433,10 +369,7 @@ impl Detector {
         }
         // Non-empty spans [knots[k], knots[k + 1]], k = first + d, in order.
         let mut k = d;
-        let p = &self.samples.position;
-        self.lower.clear();
         self.widen.clear();
-        self.upper.clear();
         for seg in &self.segments {
             while knots[k + 1] <= seg.lo {
                 k += 1;
@@ -450,7 +383,19 @@ impl Detector {
                 j += 1;
             }
             let h = (seg.hi - seg.lo) / (seg.end - seg.first) as Real;
-            let widen = Vector3::repeat(0.5 * v * h);
+            self.widen.push(0.5 * v * h);
+        }
+    }
+
+    /// Boxes of the segments: the box of the samples widened by
+    /// [`segment_widths`](Self::segment_widths).
+    fn bound_segments(&mut self, rod: &Rod) {
+        self.segment_widths(rod);
+        let p = &self.samples.position;
+        self.lower.clear();
+        self.upper.clear();
+        for (seg, &w) in self.segments.iter().zip(&self.widen) {
+            let widen = Vector3::repeat(w);
             let (lo, hi) = p[seg.first..seg.end].iter().fold(
                 (
                     Vector3::repeat(Real::INFINITY),
@@ -459,7 +404,6 @@ impl Detector {
                 |(lo, hi), x| (lo.inf(x), hi.sup(x)),
             );
             self.lower.push(lo - widen);
-            self.widen.push(0.5 * v * h);
             self.upper.push(hi + widen);
         }
     }
@@ -483,8 +427,9 @@ impl Detector {
         });
     }
 
-    /// Number of candidate segment pairs of the last detection.
+    /// Number of segment pairs the last closest-point search examined (those whose
+    /// curves may come within the reach, see [`Detector::closest`]).
     pub fn candidate_count(&self) -> usize {
-        self.candidates.len()
+        self.examined.len()
     }
 }
