@@ -207,6 +207,8 @@ pub fn solve(
     let length = problem.length_per_unknown();
     let mut stats = StepStats::default();
     let mut previous = [Real::INFINITY; 2];
+    // The merit at the applied iterate, once the line search has measured it.
+    let mut merit = None;
     problem.apply(system.rod_mut(), x);
     while stats.newton_iterations < params.max_iterations {
         stats.newton_iterations += 1;
@@ -228,7 +230,8 @@ pub fn solve(
             full = cap;
         }
         let search = params.line_search && full > tolerance;
-        let t = line_search(problem, system, x, ws, search, slope, &mut stats)?;
+        let (t, reached) = line_search(problem, system, x, ws, search, slope, merit, &mut stats)?;
+        merit = reached;
         problem.on_step(t);
         let stalled = full <= ROUND_OFF_BAND * tolerance
             && full >= 0.5 * previous[0]
@@ -382,7 +385,10 @@ pub(crate) fn negative_curvature(
 
 /// Takes the step `x += t Δx`, halving `t` until the merit decreases enough. The line
 /// search runs only from a feasible iterate (pins satisfied), where `Δx` is a descent
-/// direction; from an infeasible one the full step restores feasibility first.
+/// direction; from an infeasible one the full step restores feasibility first. `known`
+/// is the merit at the current iterate if measured already (the previous search's
+/// last trial); returns `t` and the merit at the new iterate if it was measured.
+#[allow(clippy::too_many_arguments)]
 fn line_search(
     problem: &mut dyn NewtonProblem,
     system: &mut dyn System,
@@ -390,14 +396,19 @@ fn line_search(
     ws: &mut NewtonWorkspace,
     enabled: bool,
     slope: Real,
+    known: Option<Real>,
     stats: &mut StepStats,
-) -> Result<Real, IntegratorError> {
+) -> Result<(Real, Option<Real>), IntegratorError> {
     let feasible = (0..ws.constraints.len()).all(|p| {
         let c = ws.constraints.targets[p];
         ws.constraints.gap(p, x).amax() <= 1e-10 * (1.0 + c.amax())
     });
     let search = enabled && feasible && slope < 0.0;
-    let phi0 = if search { problem.merit(system) } else { 0.0 };
+    let phi0 = match (search, known) {
+        (false, _) => 0.0,
+        (true, Some(phi)) => phi,
+        (true, None) => problem.merit(system),
+    };
     // An admissible iterate stays admissible (System::admissible).
     let guard = search && system.admissible();
     ws.base.copy_from_slice(x);
@@ -408,7 +419,7 @@ fn line_search(
         }
         problem.apply(system.rod_mut(), x);
         if !search {
-            return Ok(t);
+            return Ok((t, None));
         }
         let phi = problem.merit(system);
         let admissible = !guard || system.admissible();
@@ -422,12 +433,12 @@ fn line_search(
                     *xi = *b;
                 }
                 problem.apply(system.rod_mut(), x);
-                return Ok(t);
+                return Ok((t, Some(phi0)));
             }
             if !phi.is_finite() {
                 return Err(IntegratorError::NonFinite { what: "merit" });
             }
-            return Ok(t);
+            return Ok((t, Some(phi)));
         }
         t *= 0.5;
         stats.line_search_cuts += 1;
