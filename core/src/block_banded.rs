@@ -44,7 +44,7 @@ pub struct LowRank {
 ///
 /// [`add_block`](BlockBanded::add_block)`(i, j, B)` means \\(A_{ij} \mathrel{+}= B\\) and,
 /// for `i ≠ j`, \\(A_{ji} \mathrel{+}= B^T\\): assemble each unordered pair once.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Default)]
 pub struct BlockBanded {
     n: usize,
     bandwidth: usize,
@@ -54,6 +54,41 @@ pub struct BlockBanded {
     /// allocations for the next assembly).
     low_rank: Vec<LowRank>,
     low_rank_used: usize,
+}
+
+/// Equal size, band, far blocks (in order) and live low-rank terms.
+impl PartialEq for BlockBanded {
+    fn eq(&self, other: &Self) -> bool {
+        (self.n, self.bandwidth) == (other.n, other.bandwidth)
+            && self.blocks == other.blocks
+            && self.far == other.far
+            && self.low_rank() == other.low_rank()
+    }
+}
+
+impl Clone for BlockBanded {
+    fn clone(&self) -> Self {
+        let mut copy = Self::default();
+        copy.clone_from(self);
+        copy
+    }
+
+    /// Copies `source` into this matrix's storage: no allocation once it has grown to
+    /// the size (a solver factorising a copy each Newton iteration relies on it).
+    fn clone_from(&mut self, source: &Self) {
+        (self.n, self.bandwidth) = (source.n, source.bandwidth);
+        self.blocks.clone_from(&source.blocks);
+        self.far.clone_from(&source.far);
+        let live = &source.low_rank[..source.low_rank_used];
+        if self.low_rank.len() < live.len() {
+            self.low_rank.resize_with(live.len(), LowRank::default);
+        }
+        for (term, from) in self.low_rank.iter_mut().zip(live) {
+            term.coefficient = from.coefficient;
+            term.vector.clone_from(&from.vector);
+        }
+        self.low_rank_used = live.len();
+    }
 }
 
 impl BlockBanded {
@@ -145,6 +180,18 @@ impl BlockBanded {
         } else {
             upper.transpose()
         }
+    }
+
+    /// The band's storage: upper block `(i, i + k)` at `i · (bandwidth + 1) + k` (slots
+    /// past the last row are zero).
+    pub fn band_blocks(&self) -> &[Matrix3<Real>] {
+        &self.blocks
+    }
+
+    /// The band's storage, mutably (for factorisations in place, which leave the
+    /// matrix holding their factor).
+    pub fn band_blocks_mut(&mut self) -> &mut [Matrix3<Real>] {
+        &mut self.blocks
     }
 
     /// The stored upper band block `(i, i + k)`.

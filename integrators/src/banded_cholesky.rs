@@ -90,32 +90,10 @@ impl BandedCholesky {
     pub fn factor(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
         self.factored = false;
         let (n, bw) = band_shape(a)?;
-        let w = bw + 1;
         (self.n, self.bw) = (n, bw);
-        reset_blocks(&mut self.u, n * w);
-        for i in 0..n {
-            // Diagonal block.
-            let mut s = *a.upper(i, 0);
-            for k in i.saturating_sub(bw)..i {
-                let uki = self.u[k * w + (i - k)];
-                s -= uki.tr_mul(&uki);
-            }
-            let l = s.cholesky().ok_or_else(not_definite)?.l();
-            let linv = lower_inverse(&l);
-            if !linv.iter().all(|x| x.is_finite()) {
-                return Err(not_definite());
-            }
-            self.u[i * w] = linv;
-            // Off-diagonal blocks of row i.
-            for j in i + 1..(i + w).min(n) {
-                let mut m = *a.upper(i, j - i);
-                for k in j.saturating_sub(bw)..i {
-                    m -= self.u[k * w + (i - k)].tr_mul(&self.u[k * w + (j - k)]);
-                }
-                // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
-                self.u[i * w + (j - i)] = linv * m;
-            }
-        }
+        self.u.clear();
+        self.u.extend_from_slice(a.band_blocks());
+        factor_blocks(&mut self.u, n, bw)?;
         self.factored = true;
         Ok(())
     }
@@ -127,26 +105,72 @@ impl BandedCholesky {
     }
 
     fn solve_one(&self, x: &mut [Real]) {
-        let (n, bw, w) = (self.n, self.bw, self.bw + 1);
-        let get = |x: &[Real], i: usize| Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-        let set = |x: &mut [Real], i: usize, v: Vector3<Real>| {
-            x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
-        };
-        // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
-        for i in 0..n {
-            let mut r = get(x, i);
-            for k in i.saturating_sub(bw)..i {
-                r -= self.u[k * w + (i - k)].tr_mul(&get(x, k));
-            }
-            set(x, i, self.u[i * w] * r);
+        solve_blocks(&self.u, self.n, self.bw, x);
+    }
+}
+
+/// Factorises a band in place: on entry `u[i·(bw+1) + k]` holds \\(A_{i,i+k}\\) (the
+/// layout of [`BlockBanded`]'s band), on exit \\(U_{i,i+k}\\), with the diagonal slots
+/// holding \\(U_{ii}^{-T}\\). Each block of `A` is read before its slot is written, and
+/// only rows already final are read besides.
+pub(crate) fn factor_blocks(
+    u: &mut [Matrix3<Real>],
+    n: usize,
+    bw: usize,
+) -> Result<(), IntegratorError> {
+    let w = bw + 1;
+    for i in 0..n {
+        // Rows above are final (read only); row i is being written.
+        let (done, rest) = u.split_at_mut(i * w);
+        let len = w.min(rest.len());
+        let row = &mut rest[..len];
+        // Diagonal block.
+        let mut s = row[0];
+        for k in i.saturating_sub(bw)..i {
+            let uki = done[k * w + (i - k)];
+            s -= uki.tr_mul(&uki);
         }
-        // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
-        for i in (0..n).rev() {
-            let mut r = get(x, i);
-            for j in i + 1..(i + w).min(n) {
-                r -= self.u[i * w + (j - i)] * get(x, j);
-            }
-            set(x, i, self.u[i * w].tr_mul(&r));
+        let l = s.cholesky().ok_or_else(not_definite)?.l();
+        let linv = lower_inverse(&l);
+        if !linv.iter().all(|x| x.is_finite()) {
+            return Err(not_definite());
         }
+        row[0] = linv;
+        // Off-diagonal blocks of row i.
+        for j in i + 1..(i + w).min(n) {
+            let mut m = row[j - i];
+            for k in j.saturating_sub(bw)..i {
+                m -= done[k * w + (i - k)].tr_mul(&done[k * w + (j - k)]);
+            }
+            // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
+            row[j - i] = linv * m;
+        }
+    }
+    Ok(())
+}
+
+/// Solves `A x = b` in place for one right-hand side with the factor of
+/// [`factor_blocks`].
+pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
+    let w = bw + 1;
+    let get = |x: &[Real], i: usize| Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+    let set = |x: &mut [Real], i: usize, v: Vector3<Real>| {
+        x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
+    };
+    // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
+    for i in 0..n {
+        let mut r = get(x, i);
+        for k in i.saturating_sub(bw)..i {
+            r -= u[k * w + (i - k)].tr_mul(&get(x, k));
+        }
+        set(x, i, u[i * w] * r);
+    }
+    // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
+    for i in (0..n).rev() {
+        let mut r = get(x, i);
+        for j in i + 1..(i + w).min(n) {
+            r -= u[i * w + (j - i)] * get(x, j);
+        }
+        set(x, i, u[i * w].tr_mul(&r));
     }
 }

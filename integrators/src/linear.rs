@@ -225,11 +225,20 @@ pub enum LinearSolverKind {
 }
 
 /// The linear solver of a Newton workspace: either factorisation behind one interface.
+///
+/// It owns the Newton matrix ([`matrix_mut`](Self::matrix_mut) to assemble it), and the
+/// banded path factorises it in place: the factor takes the matrix's own storage, so a
+/// step holds one band of blocks, not two. After a banded factorisation the matrix is
+/// no longer intact ([`matrix_intact`](Self::matrix_intact)): reassemble it to look at it
+/// again.
 #[derive(Debug, Default)]
 pub struct LinearSolver {
     /// Which one factorises a banded matrix (far blocks force the sparse path).
     pub kind: LinearSolverKind,
-    banded: crate::BandedCholesky,
+    /// The Newton matrix; after a banded factorisation, its band holds the factor.
+    matrix: BlockBanded,
+    /// Whether the band of `matrix` holds the factor instead of the matrix.
+    consumed: bool,
     sparse: crate::block_sparse::BlockSparseCholesky,
     ldlt: crate::banded_ldlt::BandedLdlt,
     /// The path of the last [`factor`](Self::factor) call, which the solves use.
@@ -249,31 +258,70 @@ impl LinearSolver {
         }
     }
 
-    /// Factorises `a`; `epoch` identifies the basis (the sparse path re-analyses when
-    /// it or the far block pattern changes). A matrix with far blocks is factorised by
-    /// the sparse path whatever [`kind`](Self::kind) says.
+    /// The matrix, to assemble in place before [`factor_assembled`](Self::factor_assembled)
+    /// (its contents are whatever the last use left: reset it first).
+    pub fn matrix_mut(&mut self) -> &mut BlockBanded {
+        self.consumed = false;
+        self.active = None;
+        &mut self.matrix
+    }
+
+    /// The matrix as assembled, if no banded factorisation has overwritten it since.
+    pub fn matrix(&self) -> Option<&BlockBanded> {
+        (!self.consumed).then_some(&self.matrix)
+    }
+
+    /// Whether [`matrix`](Self::matrix) still holds the assembled matrix.
+    pub fn matrix_intact(&self) -> bool {
+        !self.consumed
+    }
+
+    /// Factorises a copy of `a`; `epoch` identifies the basis (the sparse path
+    /// re-analyses when it or the far block pattern changes). A matrix with far blocks is
+    /// factorised by the sparse path whatever [`kind`](Self::kind) says.
     pub fn factor(&mut self, a: &BlockBanded, epoch: u64) -> Result<(), IntegratorError> {
-        let kind = if a.has_far_blocks() {
+        self.matrix_mut().clone_from(a);
+        self.factor_assembled(epoch)
+    }
+
+    /// Factorises the matrix assembled through [`matrix_mut`](Self::matrix_mut) (see
+    /// [`factor`](Self::factor)); the banded path overwrites it with the factor.
+    pub fn factor_assembled(&mut self, epoch: u64) -> Result<(), IntegratorError> {
+        if self.consumed {
+            return Err(IntegratorError::SolverState(
+                "the matrix was factorised already: assemble it again",
+            ));
+        }
+        let kind = if self.matrix.has_far_blocks() {
             LinearSolverKind::Sparse
         } else {
             self.kind
         };
-        self.active = Some(kind);
+        self.active = None;
         self.indefinite = false;
         self.low_rank.clear();
-        let result = match kind {
-            LinearSolverKind::Banded => self.banded.factor(a),
-            LinearSolverKind::Sparse => self.sparse.factor(a, epoch).map(|_| ()),
-        };
-        result.and_then(|_| self.prepare_low_rank(a))
+        match kind {
+            LinearSolverKind::Banded => {
+                let (n, bw) = crate::banded_cholesky::band_shape(&self.matrix)?;
+                self.consumed = true;
+                crate::banded_cholesky::factor_blocks(self.matrix.band_blocks_mut(), n, bw)?;
+            }
+            LinearSolverKind::Sparse => self.sparse.factor(&self.matrix, epoch).map(|_| ())?,
+        }
+        self.active = Some(kind);
+        self.prepare_low_rank()
     }
 
-    /// Prepares the Sherman–Morrison corrections of `a`'s low-rank terms with the band's
-    /// factorisation just computed.
-    fn prepare_low_rank(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+    /// Prepares the Sherman–Morrison corrections of the matrix's low-rank terms with
+    /// the band's factorisation just computed.
+    fn prepare_low_rank(&mut self) -> Result<(), IntegratorError> {
+        if self.matrix.low_rank().is_empty() {
+            return Ok(());
+        }
         let mut corrections = std::mem::take(&mut self.low_rank);
-        let result = corrections.prepare(a, |x| self.solve_band(x));
-        self.low_rank = corrections;
+        let matrix = std::mem::take(&mut self.matrix);
+        let result = corrections.prepare(&matrix, |x| self.solve_band(&matrix, x));
+        (self.matrix, self.low_rank) = (matrix, corrections);
         if result.is_err() {
             self.active = None;
         }
@@ -284,12 +332,24 @@ impl LinearSolver {
     /// [`BandedLdlt`](crate::banded_ldlt::BandedLdlt); errors for far blocks or a nearly
     /// singular pivot.
     pub fn factor_indefinite(&mut self, a: &BlockBanded) -> Result<(), IntegratorError> {
+        self.matrix_mut().clone_from(a);
+        self.factor_indefinite_assembled()
+    }
+
+    /// [`factor_indefinite`](Self::factor_indefinite) of the assembled matrix (which
+    /// must be intact); the matrix stays intact.
+    pub fn factor_indefinite_assembled(&mut self) -> Result<(), IntegratorError> {
         self.active = None;
         self.low_rank.clear();
-        self.ldlt.factor(a)?;
+        if self.consumed {
+            return Err(IntegratorError::SolverState(
+                "the matrix was factorised already: assemble it again",
+            ));
+        }
+        self.ldlt.factor(&self.matrix)?;
         self.active = Some(LinearSolverKind::Banded);
         self.indefinite = true;
-        self.prepare_low_rank(a)
+        self.prepare_low_rank()
     }
 
     /// A direction of negative curvature of the matrix last given to
@@ -309,18 +369,32 @@ impl LinearSolver {
     /// Low-rank terms of the matrix (see [`BlockBanded::add_low_rank`]) are applied by
     /// the Sherman–Morrison formula.
     pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
-        self.solve_band(rhs)?;
+        let matrix = std::mem::take(&mut self.matrix);
+        let result = self.solve_band(&matrix, rhs);
+        self.matrix = matrix;
+        result?;
         self.low_rank.apply(rhs);
         Ok(())
     }
 
-    /// Solves with the factorised band and far blocks only.
-    fn solve_band(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
+    /// Solves with the factorised band and far blocks only; `matrix` is the solver's
+    /// own (holding the banded factor), lent out.
+    fn solve_band(
+        &mut self,
+        matrix: &BlockBanded,
+        rhs: &mut [Real],
+    ) -> Result<(), IntegratorError> {
         if self.is_indefinite() {
             return self.ldlt.solve_in_place(rhs);
         }
         match self.active {
-            Some(LinearSolverKind::Banded) => self.banded.solve_in_place(rhs),
+            Some(LinearSolverKind::Banded) => {
+                let (n, bw) = (matrix.dim(), matrix.bandwidth());
+                let column = |c: &mut [Real]| {
+                    crate::banded_cholesky::solve_blocks(matrix.band_blocks(), n, bw, c)
+                };
+                crate::banded_cholesky::for_each_rhs(self.consumed, n, rhs, column)
+            }
             Some(LinearSolverKind::Sparse) => self.sparse.solve_in_place(rhs),
             None => Err(IntegratorError::SolverState(
                 "solve before a successful factor",

@@ -160,7 +160,7 @@ pub struct NewtonWorkspace {
     base: Vec<Vector3<Real>>,
     dx: Vec<Vector3<Real>>,
     flat: Vec<Real>,
-    matrix: BlockBanded,
+    /// The linear solver, which owns the Newton matrix.
     solver: LinearSolver,
     constraints: Constraints,
     multipliers: Vec<Vector3<Real>>,
@@ -175,7 +175,7 @@ impl NewtonWorkspace {
 
     /// The Newton matrix buffer (scratch between solves).
     pub(crate) fn matrix_mut(&mut self) -> &mut BlockBanded {
-        &mut self.matrix
+        self.solver.matrix_mut()
     }
 
     fn resize(&mut self, n: usize, pins: usize) {
@@ -212,7 +212,7 @@ pub fn solve(
     problem.apply(system.rod_mut(), x);
     while stats.newton_iterations < params.max_iterations {
         stats.newton_iterations += 1;
-        problem.residual_and_matrix(system, &mut ws.r, &mut ws.matrix);
+        problem.residual_and_matrix(system, &mut ws.r, ws.solver.matrix_mut());
         let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;
         let descends = slope < 0.0;
         if ws.solver.is_indefinite() && !descends && problem.on_not_positive_definite() {
@@ -313,12 +313,13 @@ fn assemble(
     ws: &mut NewtonWorkspace,
     assembled: bool,
 ) -> Real {
+    let matrix = ws.solver.matrix_mut();
     if !assembled {
-        problem.matrix(system, &mut ws.matrix);
+        problem.matrix(system, matrix);
     }
     let rho = problem.augmentation();
-    ws.constraints.add_gram(rho, &mut ws.matrix);
-    ws.constraints.points.eliminate_matrix(&mut ws.matrix);
+    ws.constraints.add_gram(rho, matrix);
+    ws.constraints.points.eliminate_matrix(matrix);
     rho
 }
 
@@ -333,25 +334,59 @@ fn factor_matrix(
     let epoch = system.rod().topology_epoch();
     loop {
         let rho = assemble(problem, system, ws, std::mem::take(&mut assembled));
-        match ws.solver.factor(&ws.matrix, epoch) {
+        match ws.solver.factor_assembled(epoch) {
             Ok(()) => return Ok(rho),
-            Err(IntegratorError::NotPositiveDefinite { .. }) if !ws.matrix.is_finite() => {
-                return Err(IntegratorError::NonFinite {
-                    what: "Newton matrix",
-                })
+            Err(e @ IntegratorError::NotPositiveDefinite { .. }) => {
+                match indefinite_fallback(problem, system, ws)? {
+                    Fallback::Factored => return Ok(rho),
+                    Fallback::Retry => {}
+                    Fallback::Fail => return Err(e),
+                }
             }
-            Err(IntegratorError::NotPositiveDefinite { .. })
-                if problem.indefinite_allowed()
-                    && !ws.matrix.has_far_blocks()
-                    && ws.solver.factor_indefinite(&ws.matrix).is_ok() =>
-            {
-                return Ok(rho)
-            }
-            Err(IntegratorError::NotPositiveDefinite { .. })
-                if problem.on_not_positive_definite() => {}
             Err(e) => return Err(e),
         }
     }
+}
+
+/// What to do after the Cholesky factorisation failed.
+enum Fallback {
+    /// The indefinite factorisation took the matrix.
+    Factored,
+    /// The problem switched to its definite matrix: assemble and factorise again.
+    Retry,
+    /// Neither: report the failure.
+    Fail,
+}
+
+/// After a failed Cholesky factorisation: the matrix (reassembled if the banded factor
+/// overwrote it) is checked for non-finite entries, factorised by the indefinite `UᵀDU`
+/// if the problem allows and it has no far blocks, or the problem is asked for its
+/// definite matrix.
+fn indefinite_fallback(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+) -> Result<Fallback, IntegratorError> {
+    if !ws.solver.matrix_intact() {
+        assemble(problem, system, ws, false);
+    }
+    let (finite, far) = ws
+        .solver
+        .matrix()
+        .map_or((false, false), |m| (m.is_finite(), m.has_far_blocks()));
+    if !finite {
+        return Err(IntegratorError::NonFinite {
+            what: "Newton matrix",
+        });
+    }
+    if problem.indefinite_allowed() && !far && ws.solver.factor_indefinite_assembled().is_ok() {
+        return Ok(Fallback::Factored);
+    }
+    Ok(if problem.on_not_positive_definite() {
+        Fallback::Retry
+    } else {
+        Fallback::Fail
+    })
 }
 
 /// Whether the applied state is a stable stationary point: assembles the problem's
@@ -369,10 +404,14 @@ pub(crate) fn negative_curvature(
     ws.constraints.setup(system.rod(), system.pins())?;
     assemble(problem, system, ws, false);
     let epoch = system.rod().topology_epoch();
-    if ws.solver.factor(&ws.matrix, epoch).is_ok()
-        || ws.matrix.has_far_blocks()
-        || ws.solver.factor_indefinite(&ws.matrix).is_err()
-    {
+    if ws.solver.factor_assembled(epoch).is_ok() {
+        return Ok(None);
+    }
+    if !ws.solver.matrix_intact() {
+        assemble(problem, system, ws, false);
+    }
+    let far = ws.solver.matrix().is_none_or(|m| m.has_far_blocks());
+    if far || ws.solver.factor_indefinite_assembled().is_err() {
         return Ok(None);
     }
     d.resize(n, Vector3::zeros());
