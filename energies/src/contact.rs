@@ -44,15 +44,17 @@ mod assemble;
 pub mod detect;
 mod friction;
 pub mod obstacle;
+mod pair;
 mod penalty;
 mod skin;
 mod surface;
 
 use crate::{Energy, EnergySummary};
-use detect::{ContactPoint, Detector, SamplePair};
+use detect::{ContactPoint, Detector};
 use friction::Friction;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 pub use obstacle::Obstacle;
+use pair::pair_rows;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::rod::{non_negative, positive};
@@ -420,63 +422,6 @@ impl Contact {
         self.for_each_contact(rod, |c| out.extend([c.s, c.t]))?;
         self.obstacle_interaction_points(rod, out)
     }
-
-    /// Weight of a sample pair: \\(w_a w_b / (r_a + r_b)^2\\).
-    fn pair_weight(&self, d: &Detector, pair: &SamplePair) -> Real {
-        let w = &d.samples.weight;
-        w[pair.a as usize] * w[pair.b as usize] / self.sum_of_radii(d, pair).powi(2)
-    }
-
-    /// The Hessian of a sample pair's penalty with respect to the difference of its
-    /// points, \\(w\\,[\\phi'' n n^T + \\tfrac{\\phi'}{d}(I - n n^T)]\\): the stiffness along
-    /// the normal and, for [`HessianKind::Exact`], the turning of the normal (negative
-    /// semi-definite, since \\(\\phi' \\le 0\\); without it Newton's method converges only
-    /// linearly, at the ratio of the two terms, about \\(|\\phi'|/(d\\,\\phi'')\\)).
-    fn pair_hessian(&self, d: &Detector, pair: &SamplePair, kind: HessianKind) -> Matrix3<Real> {
-        let (weight, gap) = (self.pair_weight(d, pair), self.gap(d, pair));
-        let nn = pair.normal * pair.normal.transpose();
-        let along = nn * (weight * self.penalty.curvature(gap));
-        if kind != HessianKind::Exact {
-            return along;
-        }
-        let turning = weight * self.penalty.slope(gap) / pair.distance;
-        along + (Matrix3::identity() - nn) * turning
-    }
-
-    /// \\(r_a + r_b\\) of a sample pair.
-    fn sum_of_radii(&self, d: &Detector, pair: &SamplePair) -> Real {
-        if self.radii.values.is_empty() {
-            return 2.0 * self.params.radius;
-        }
-        let s = &d.samples.s;
-        self.radius_at(s[pair.a as usize]) + self.radius_at(s[pair.b as usize])
-    }
-
-    /// The gap \\(d - (r_a + r_b)\\) of a sample pair.
-    fn gap(&self, d: &Detector, pair: &SamplePair) -> Real {
-        pair.distance - self.sum_of_radii(d, pair)
-    }
-}
-
-/// Merged weights \\(u_i = b_i(s_a) - b_i(s_b)\\) of a sample pair: at most
-/// `2 · MAX_ORDER` control points.
-fn pair_rows(d: &Detector, pair: &SamplePair, out: &mut [(usize, Real); 2 * MAX_ORDER]) -> usize {
-    let mut len = 0;
-    let samples = &d.samples;
-    for (k, sign) in [(pair.a as usize, 1.0), (pair.b as usize, -1.0)] {
-        let first = samples.first[k] as usize;
-        for (a, &b) in samples.row(k).iter().enumerate() {
-            let (i, w) = (first + a, sign * b);
-            match out[..len].iter_mut().find(|(j, _)| *j == i) {
-                Some((_, total)) => *total += w,
-                None => {
-                    out[len] = (i, w);
-                    len += 1;
-                }
-            }
-        }
-    }
-    len
 }
 
 impl Energy for Contact {
