@@ -8,9 +8,8 @@
 //! 372 000 instructions per factorisation over 1 919 factorisations, against 95 000 over
 //! 1 443).
 //!
-//! [`SparseCholesky`]:
-//! The pattern is the full block band plus the far blocks (self-contact couplings), laid
-//! out by `block_pattern`. The natural ordering is optimal for a band (faer's AMD finds
+//! **[`SparseCholesky`].** The pattern is the full block band plus the far blocks
+//! (self-contact couplings), laid out by `block_pattern`. The natural ordering is optimal for a band (faer's AMD finds
 //! the same fill at 10–35 % more cost per factorisation), and stays the choice while
 //! the far blocks enlarge the pattern's envelope — which the natural-order factor fills
 //! — by at most [`NATURAL_FILL_LIMIT`]: couplings between nearby control points. Far
