@@ -252,7 +252,7 @@ pub fn solve(
 
 /// Assembles and factorises `A` (the exact Hessian by Cholesky, else by the indefinite
 /// factorisation if the problem allows, else the problem's definite fallback; with
-/// `assembled`, the problem's matrix is already in `ws.matrix` for the first try), then
+/// `assembled`, the problem's matrix is already in the solver's matrix for the first try), then
 /// solves the KKT system into `ws.dx` and the multipliers. Returns the slope
 /// \(r \cdot \Delta x\) (negative for a descent direction from a feasible iterate, where
 /// \(G\Delta x = 0\) makes it \((r - G^T\mu)\cdot\Delta x\)).
@@ -305,7 +305,7 @@ fn newton_direction(
     Ok(ws.base.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum())
 }
 
-/// Assembles the problem's matrix into `ws.matrix` (unless `assembled`: it is there)
+/// Assembles the problem's matrix into the solver's (unless `assembled`: it is there)
 /// with the pins' augmentation \\(\rho G^T G\\) and the point pins eliminated; returns ρ.
 fn assemble(
     problem: &mut dyn NewtonProblem,
