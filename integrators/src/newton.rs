@@ -252,7 +252,7 @@ pub fn solve(
 
 /// Assembles and factorises `A` (the exact Hessian by Cholesky, else by the indefinite
 /// factorisation if the problem allows, else the problem's definite fallback; with
-/// `assembled`, the problem's matrix is already in the solver's matrix for the first try), then
+/// `assembled`, the problem's matrix is in the solver already for the first try), then
 /// solves the KKT system into `ws.dx` and the multipliers. Returns the slope
 /// \(r \cdot \Delta x\) (negative for a descent direction from a feasible iterate, where
 /// \(G\Delta x = 0\) makes it \((r - G^T\mu)\cdot\Delta x\)).
