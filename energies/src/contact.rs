@@ -50,7 +50,7 @@ mod skin;
 mod surface;
 
 use crate::{Energy, EnergySummary};
-use detect::{ContactPoint, Detector};
+use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
 use nalgebra::Vector3;
 pub use obstacle::Obstacle;
@@ -524,12 +524,15 @@ impl Energy for Contact {
         for &(start, end) in &d.groups {
             let pairs = &d.pairs[start..end];
             let order = d.samples.order;
-            let first = |k: u32| d.samples.first[k as usize] as usize;
-            local.start(
-                pairs
+            // Each strand's samples touch a run of consecutive control points.
+            let run = |side: fn(&SamplePair) -> u32| {
+                let firsts = pairs
                     .iter()
-                    .flat_map(|c| (0..order).flat_map(move |k| [first(c.a) + k, first(c.b) + k])),
-            );
+                    .map(|c| d.samples.first[side(c) as usize] as usize);
+                let (lo, hi) = firsts.fold((usize::MAX, 0), |(lo, hi), f| (lo.min(f), hi.max(f)));
+                lo..hi + order
+            };
+            local.start(run(|c| c.a), run(|c| c.b));
             for c in pairs {
                 let len = pair_rows(&d, c, &mut weights);
                 local.add(&weights[..len], &self.pair_hessian(&d, c, kind));

@@ -8,6 +8,7 @@
 use nalgebra::Matrix3;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::{BlockBanded, Real};
+use std::ops::Range;
 
 /// A symmetric 3×3 block by its six entries `xx, yy, zz, xy, xz, yz`: every block of
 /// the contact Hessian is one (a sum of weights times symmetric matrices), so a third of
@@ -35,18 +36,28 @@ fn block(e: &SymBlock) -> Matrix3<Real> {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct GroupHessian {
     index: Vec<usize>,
+    /// The group's control points as (up to two) runs `(first, end, local offset)`.
+    runs: [(usize, usize, usize); 2],
     blocks: Vec<SymBlock>,
     /// Far blocks of every group so far, `(row < col)`, merged by [`Self::flush`].
     far: Vec<(usize, usize, Matrix3<Real>)>,
 }
 
 impl GroupHessian {
-    /// Starts a group over the control points `points` (any order, repeats allowed).
-    pub fn start(&mut self, points: impl Iterator<Item = usize>) {
+    /// Starts a group over the control points of two runs `a` and `b` (the two strands'
+    /// samples touch consecutive control points), which may overlap.
+    pub fn start(&mut self, a: Range<usize>, b: Range<usize>) {
+        let (first, second) = if a.start <= b.start { (a, b) } else { (b, a) };
         self.index.clear();
-        self.index.extend(points);
-        self.index.sort_unstable();
-        self.index.dedup();
+        if second.start <= first.end {
+            let end = first.end.max(second.end);
+            self.runs = [(first.start, end, 0), (end, end, end - first.start)];
+            self.index.extend(first.start..end);
+        } else {
+            let len = first.len();
+            self.runs = [(first.start, first.end, 0), (second.start, second.end, len)];
+            self.index.extend(first.clone().chain(second));
+        }
         let n = self.index.len();
         self.blocks.clear();
         self.blocks.resize(n * n, [0.0; 6]);
@@ -54,22 +65,27 @@ impl GroupHessian {
 
     /// Adds `w_i w_j · m` (`m` symmetric) at every pair `(i, j)`, `i ≤ j` in local order,
     /// of `weights` (control point, weight); every control point must belong to the group.
+    /// Each product is formed as `(m w_i) w_j` with `i` the lower of the two in local
+    /// order.
     pub fn add(&mut self, weights: &[(usize, Real)], m: &Matrix3<Real>) {
         let m = entries(m);
         let n = self.index.len();
-        let mut local = [(0, 0.0); 2 * MAX_ORDER];
+        let mut local = [(0, 0.0, [0.0; 6]); 2 * MAX_ORDER];
         let count = weights.len().min(local.len());
         for (slot, &(i, w)) in local.iter_mut().zip(weights) {
-            *slot = (self.local(i), w);
+            *slot = (self.local(i), w, m.map(|x| x * w));
         }
-        let local = &mut local[..count];
-        local.sort_unstable_by_key(|&(a, _)| a);
-        for (k, &(a, wa)) in local.iter().enumerate() {
-            let row = m.map(|x| x * wa);
-            for &(b, wb) in &local[k..] {
-                let target = &mut self.blocks[a * n + b];
-                for (t, r) in target.iter_mut().zip(&row) {
-                    *t += r * wb;
+        let local = &local[..count];
+        for (k, &(a, wa, ma)) in local.iter().enumerate() {
+            for &(b, wb, mb) in &local[k..] {
+                // (m w_lower) w_higher, stored at (lower, higher).
+                let (at, row, w) = if a <= b {
+                    (a * n + b, ma, wb)
+                } else {
+                    (b * n + a, mb, wa)
+                };
+                for (t, r) in self.blocks[at].iter_mut().zip(&row) {
+                    *t += r * w;
                 }
             }
         }
@@ -108,7 +124,14 @@ impl GroupHessian {
         self.far.clear();
     }
 
+    /// Position of control point `i` in the group (which holds it).
+    #[inline]
     fn local(&self, i: usize) -> usize {
-        self.index.partition_point(|&k| k < i)
+        let [(lo, hi, offset), (lo2, _, offset2)] = self.runs;
+        if (lo..hi).contains(&i) {
+            i - lo + offset
+        } else {
+            i - lo2 + offset2
+        }
     }
 }
