@@ -93,15 +93,22 @@ impl Pin {
         }
     }
 
+    /// An error if the pin's position is not finite.
+    pub fn check_position(&self) -> Result<(), CoreError> {
+        if self.position.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(CoreError::NonFiniteState {
+                what: "pin position",
+                index: 0,
+            })
+        }
+    }
+
     /// The constraint row: basis functions non-zero at the pinned point (for a tangent
     /// pin, the control point next to the end, with weight 1).
     pub fn row(&self, rod: &Rod) -> Result<BasisValues, CoreError> {
-        if !self.position.iter().all(|x| x.is_finite()) {
-            return Err(CoreError::NonFiniteState {
-                what: "pin position",
-                index: 0,
-            });
-        }
+        self.check_position()?;
         if self.tangent {
             let mut row = BasisValues::default();
             // The control point next to the end of the pin's rod (its segment).

@@ -38,17 +38,40 @@ pub(crate) struct Constraints {
     /// Scratch: the Schur pins' \(G^T\mu\) at each eliminated control point.
     others: Vec<Vector3<Real>>,
     n: usize,
+    /// What `rows` were evaluated for: the rod's topology epoch and each pin's
+    /// material coordinate (bits) and tangent flag.
+    rows_for: Option<u64>,
+    row_pins: Vec<(u64, bool)>,
 }
 
 impl Constraints {
-    /// Evaluates the pins' rows on the rod's current basis.
+    /// Evaluates the pins' rows on the rod's current basis (kept from the last call
+    /// while the basis and the pins' material coordinates are the same: a row depends on
+    /// nothing else), and their projectors.
     pub fn setup(&mut self, rod: &Rod, pins: &[Pin]) -> Result<(), IntegratorError> {
-        self.rows.clear();
-        self.projectors.clear();
-        for pin in pins {
-            self.rows.push(pin.row(rod)?);
-            self.projectors.push(pin.projector());
+        let same = self.rows_for == Some(rod.topology_epoch())
+            && self.row_pins.len() == pins.len()
+            && pins
+                .iter()
+                .zip(&self.row_pins)
+                .all(|(p, &(at, tangent))| p.at.to_bits() == at && p.tangent == tangent);
+        if same {
+            for pin in pins {
+                pin.check_position()?;
+            }
+        } else {
+            self.rows_for = None;
+            self.rows.clear();
+            for pin in pins {
+                self.rows.push(pin.row(rod)?);
+            }
+            self.row_pins.clear();
+            self.row_pins
+                .extend(pins.iter().map(|p| (p.at.to_bits(), p.tangent)));
+            self.rows_for = Some(rod.topology_epoch());
         }
+        self.projectors.clear();
+        self.projectors.extend(pins.iter().map(Pin::projector));
         self.targets.resize(pins.len(), Vector3::zeros());
         self.n = rod.len();
         self.points.setup(&self.rows, &self.projectors)?;
