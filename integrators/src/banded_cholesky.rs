@@ -149,28 +149,36 @@ pub(crate) fn factor_blocks(
     Ok(())
 }
 
+/// The 3-vector of control point `i` in a flat array of coordinates.
+#[inline]
+pub(crate) fn get3(x: &[Real], i: usize) -> Vector3<Real> {
+    Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2])
+}
+
+/// Writes the 3-vector of control point `i` into a flat array of coordinates.
+#[inline]
+pub(crate) fn set3(x: &mut [Real], i: usize, v: Vector3<Real>) {
+    x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
+}
+
 /// Solves `A x = b` in place for one right-hand side with the factor of
 /// [`factor_blocks`].
 pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
     let w = bw + 1;
-    let get = |x: &[Real], i: usize| Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-    let set = |x: &mut [Real], i: usize, v: Vector3<Real>| {
-        x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
-    };
     // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
     for i in 0..n {
-        let mut r = get(x, i);
+        let mut r = get3(x, i);
         for k in i.saturating_sub(bw)..i {
-            r -= u[k * w + (i - k)].tr_mul(&get(x, k));
+            r -= u[k * w + (i - k)].tr_mul(&get3(x, k));
         }
-        set(x, i, u[i * w] * r);
+        set3(x, i, u[i * w] * r);
     }
     // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
     for i in (0..n).rev() {
-        let mut r = get(x, i);
+        let mut r = get3(x, i);
         for j in i + 1..(i + w).min(n) {
-            r -= u[i * w + (j - i)] * get(x, j);
+            r -= u[i * w + (j - i)] * get3(x, j);
         }
-        set(x, i, u[i * w].tr_mul(&r));
+        set3(x, i, u[i * w].tr_mul(&r));
     }
 }

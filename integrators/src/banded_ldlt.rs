@@ -14,7 +14,7 @@
 //! the exact step (quadratic convergence, also to a saddle of the merit such as a planar
 //! state that could buckle out of plane) is still wanted; see [`crate::newton`].
 
-use crate::banded_cholesky::{band_shape, for_each_rhs, reset_blocks};
+use crate::banded_cholesky::{band_shape, for_each_rhs, get3, reset_blocks, set3};
 use crate::IntegratorError;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{BlockBanded, Real};
@@ -132,26 +132,22 @@ impl BandedLdlt {
 
     fn solve_one(&self, x: &mut [Real]) {
         let (n, bw, w) = (self.n, self.bw, self.bw + 1);
-        let get = |x: &[Real], i: usize| Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-        let set = |x: &mut [Real], i: usize, v: Vector3<Real>| {
-            x[3 * i..3 * i + 3].copy_from_slice(v.as_slice());
-        };
         for i in 0..n {
-            let mut r = get(x, i);
+            let mut r = get3(x, i);
             for k in i.saturating_sub(bw)..i {
-                r -= self.u[k * w + (i - k)].tr_mul(&get(x, k));
+                r -= self.u[k * w + (i - k)].tr_mul(&get3(x, k));
             }
-            set(x, i, r);
+            set3(x, i, r);
         }
         for i in 0..n {
-            set(x, i, self.d_inv[i] * get(x, i));
+            set3(x, i, self.d_inv[i] * get3(x, i));
         }
         for i in (0..n).rev() {
-            let mut r = get(x, i);
+            let mut r = get3(x, i);
             for j in i + 1..(i + w).min(n) {
-                r -= self.u[i * w + (j - i)] * get(x, j);
+                r -= self.u[i * w + (j - i)] * get3(x, j);
             }
-            set(x, i, r);
+            set3(x, i, r);
         }
     }
 }

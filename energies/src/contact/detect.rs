@@ -181,7 +181,8 @@ impl Detector {
             let margin = SKIN * reach;
             self.place_samples(rod);
             self.placed_all = true;
-            self.bound_segments(rod);
+            self.segment_widths(rod);
+            self.bound_segments();
             self.sweep(reach + margin, exclusion);
             self.candidates_exact = false;
             let wide = reach + margin;
@@ -233,7 +234,7 @@ impl Detector {
                     self.placed_all = true;
                 }
                 let exclusion = self.skin.key.map_or(0.0, |(_, settings)| settings[1]);
-                self.bound_segments(rod);
+                self.bound_segments();
                 self.sweep(reach, exclusion);
                 self.candidates_exact = true;
             }
@@ -388,9 +389,8 @@ impl Detector {
     }
 
     /// Boxes of the segments: the box of the samples widened by
-    /// [`segment_widths`](Self::segment_widths).
-    fn bound_segments(&mut self, rod: &Rod) {
-        self.segment_widths(rod);
+    /// [`segment_widths`](Self::segment_widths) (computed already).
+    fn bound_segments(&mut self) {
         let p = &self.samples.position;
         self.lower.clear();
         self.upper.clear();

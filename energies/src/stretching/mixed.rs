@@ -250,12 +250,10 @@ impl Stretching {
     /// \\hat\\lambda_j) b_j\\)).
     pub(super) fn mixed_energy(&self, rod: &Rod) -> Real {
         if self.table.matches(rod) {
-            let ea = self.axial_stiffness();
             let mut energy = 0.0;
             self.table.for_each(rod, |k| {
-                let hat = self.multiplier(k.index);
-                let stretch = if k.m > 0.0 { ea * k.b / k.m } else { 0.0 };
-                energy += 0.5 * (2.0 * hat + stretch) * k.b;
+                let (_, tension) = self.function_tension(k.index, k.b, k.m);
+                energy += 0.5 * (tension + self.multiplier(k.index)) * k.b;
             });
             return energy;
         }
@@ -271,13 +269,9 @@ impl Stretching {
     /// field `T` at each quadrature point.
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         if self.table.matches(rod) {
-            let ea = self.axial_stiffness();
             self.table.for_each(rod, |k| {
-                let stretch = if k.m > 0.0 { ea * k.b / k.m } else { 0.0 };
-                let tension = self.multiplier(k.index) + stretch;
-                for (g, v) in gradient[k.first..].iter_mut().zip(k.db) {
-                    *g += v * tension;
-                }
+                let (_, tension) = self.function_tension(k.index, k.b, k.m);
+                add_scaled(gradient, k.first, k.db, tension);
             });
             return;
         }
@@ -299,6 +293,18 @@ impl Stretching {
         });
     }
 
+    /// Of tension function `index` with strain moment `b` and weight `m`: the stiffness
+    /// `c = EA/m` (0 for an empty support) and the tension \\(\\lambda = \\hat\\lambda + c\\,b\\).
+    #[inline]
+    fn function_tension(&self, index: usize, b: Real, m: Real) -> (Real, Real) {
+        let c = if m > 0.0 {
+            self.axial_stiffness() / m
+        } else {
+            0.0
+        };
+        (c, self.multiplier(index) + c * b)
+    }
+
     /// Hessian of the mixed form (see the module docs), and with `gradient` the gradient
     /// too, \\(\\sum_k \\lambda_k\\, \\partial b_k/\\partial q_a\\), from the same sweep.
     pub(super) fn mixed_hessian(
@@ -314,21 +320,14 @@ impl Stretching {
         let d = rod.basis().degree();
         // λ of the last d finished tension functions, at j mod d.
         let mut lambda = [0.0; MAX_DEGREE];
-        let ea = self.axial_stiffness();
         // The first quadrature point not yet given its geometric term.
         let mut cursor = 0;
         self.sweep(rod, |pr| {
-            let c = if pr.m > 0.0 { ea / pr.m } else { 0.0 };
-            let tension = self.multiplier(pr.index) + c * pr.b;
-            lambda[pr.index % d] = match kind {
-                HessianKind::Exact => tension,
-                _ => tension.max(0.0),
-            };
+            let (c, tension) = self.function_tension(pr.index, pr.b, pr.m);
+            lambda[pr.index % d] = geometric_tension(kind, tension);
             let db = &pr.db[..pr.width];
             if let Some(g) = gradient.as_deref_mut() {
-                for (g, v) in g[pr.first..].iter_mut().zip(db) {
-                    *g += v * tension;
-                }
+                add_scaled(g, pr.first, db, tension);
             }
             add_outer_products(hessian, pr.first, c, db);
             // Span `pr.index` has all its tension functions (index − d + 1 ..= index).
@@ -348,21 +347,13 @@ impl Stretching {
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
-        let ea = self.axial_stiffness();
         self.table.for_each(rod, |k| {
-            let c = if k.m > 0.0 { ea / k.m } else { 0.0 };
-            let tension = self.multiplier(k.index) + c * k.b;
+            let (c, tension) = self.function_tension(k.index, k.b, k.m);
             if let Some(g) = gradient.as_deref_mut() {
-                for (g, v) in g[k.first..].iter_mut().zip(k.db) {
-                    *g += v * tension;
-                }
+                add_scaled(g, k.first, k.db, tension);
             }
             add_outer_products(hessian, k.first, c, k.db);
-            let geometric = match kind {
-                HessianKind::Exact => tension,
-                _ => tension.max(0.0),
-            };
-            add_scaled_identities(hessian, k, geometric);
+            add_scaled_identities(hessian, k, geometric_tension(kind, tension));
         });
     }
 
@@ -413,6 +404,24 @@ impl Stretching {
             }
         }
         cursor
+    }
+}
+
+/// The tension the geometric stiffness uses: all of it for the exact Hessian, only
+/// its positive part for the definite one.
+#[inline]
+fn geometric_tension(kind: HessianKind, tension: Real) -> Real {
+    match kind {
+        HessianKind::Exact => tension,
+        _ => tension.max(0.0),
+    }
+}
+
+/// `gradient[first + a] += tension · db[a]`.
+#[inline]
+fn add_scaled(gradient: &mut [Vector3<Real>], first: usize, db: &[Vector3<Real>], tension: Real) {
+    for (g, v) in gradient[first..].iter_mut().zip(db) {
+        *g += v * tension;
     }
 }
 
