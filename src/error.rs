@@ -58,6 +58,30 @@ pub enum Error {
         /// What it must satisfy.
         reason: String,
     },
+    /// A scene's estimated needs exceed a resource limit (`splinerod run
+    /// --allow-large` runs it anyway); names the fields behind the estimate.
+    #[error("`{field}`: the run would need {estimate:.3e} {what}, over the limit of {limit:.1e} (see scenes/README.md, resource limits); pass --allow-large to run it anyway")]
+    TooLarge {
+        /// The scene fields behind the estimate.
+        field: String,
+        /// What is counted.
+        what: &'static str,
+        /// The estimate.
+        estimate: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A scene's estimated memory exceeds the machine's physical memory; names the
+    /// fields behind the estimate.
+    #[error("`{field}`: the run would need {estimate:.3e} bytes of memory, more than this machine has ({available:.3e})")]
+    OutOfMemory {
+        /// The scene fields behind the estimate.
+        field: String,
+        /// The estimate, bytes.
+        estimate: f64,
+        /// Physical memory, bytes.
+        available: f64,
+    },
     /// Reading or writing a file failed.
     #[error("{path}: {source}")]
     Io {

@@ -2,7 +2,7 @@
 //!
 //! * `splinerod run SCENE.toml [--json OUT] [--stats OUT.csv] [--frames DIR [--every K]
 //!   [--camera xy|xz|yz|oblique] [--svg] [--polygon] [--gif OUT.gif]] [--vtk DIR]`
-//!   [--shard K/N]
+//!   [--shard K/N] [--max-steps N] [--allow-large]
 //! * `splinerod merge OUT.json SHARD.json…` (the shards of a `--shard` ensemble run)
 //! * `splinerod report [--quick] --out DIR`
 //! * `splinerod bench [--quick] [--json OUT]`
@@ -11,9 +11,12 @@
 
 use clap::{Args, Parser, Subcommand};
 use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
+use splinerod::run::runner::RunControl;
 use splinerod::{Error, Observer};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -94,11 +97,22 @@ struct RunArgs {
     /// merge the shards' `--json` files with `splinerod merge`.
     #[arg(long)]
     shard: Option<String>,
+    /// Stops after N steps (outputs complete, JSON `"interrupted": true` if the scene
+    /// had more).
+    #[arg(long, value_name = "N")]
+    max_steps: Option<usize>,
+    /// Runs a scene past the resource limits of `scenes/README.md` (steps, control
+    /// points, samples, memory, work) instead of refusing it.
+    #[arg(long)]
+    allow_large: bool,
 }
+
+/// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report).
+const INTERRUPTED: u8 = 130;
 
 fn main() -> ExitCode {
     match execute(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)
@@ -106,7 +120,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn execute(cli: Cli) -> Result<(), Error> {
+fn execute(cli: Cli) -> Result<ExitCode, Error> {
     match cli.command {
         Command::Run(args) => run(args),
         Command::Report { quick, out } => {
@@ -116,10 +130,10 @@ fn execute(cli: Cli) -> Result<(), Error> {
                 report.order,
                 out.join("report.md").display()
             );
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { quick, json } => bench(quick, json),
-        Command::Merge { out, shards } => merge(&out, &shards),
+        Command::Bench { quick, json } => bench(quick, json).map(|()| ExitCode::SUCCESS),
+        Command::Merge { out, shards } => merge(&out, &shards).map(|()| ExitCode::SUCCESS),
     }
 }
 
@@ -236,23 +250,64 @@ fn observers(args: &RunArgs) -> Result<Vec<Box<dyn Observer>>, Error> {
     Ok(list)
 }
 
-fn run(args: RunArgs) -> Result<(), Error> {
+fn run(args: RunArgs) -> Result<ExitCode, Error> {
     let scene = splinerod::Scene::load(&args.scene)?;
+    let shard = match &args.shard {
+        Some(text) => Some(splinerod::run::shard::Shard::parse(text)?),
+        None => None,
+    };
+    if !args.allow_large {
+        let limits = splinerod::scene::Limits::default();
+        match &shard {
+            Some(s) => scene.with_member_count(s.members(&scene)?.len()),
+            None => scene.clone(),
+        }
+        .check_limits(&limits)?;
+    }
     let mut boxed = observers(&args)?;
     let mut refs: Vec<&mut dyn Observer> = Vec::with_capacity(boxed.len());
     for b in boxed.iter_mut() {
         refs.push(b.as_mut());
     }
-    let result = match &args.shard {
-        Some(text) => {
-            let shard = splinerod::run::shard::Shard::parse(text)?;
-            splinerod::run::runner::run_shard(&scene, &mut refs, shard)?
-        }
-        None => splinerod::run_observed(&scene, &mut refs)?,
+    let signalled = Arc::new(AtomicBool::new(false));
+    stop_on_signals(&signalled)?;
+    let control = RunControl {
+        max_steps: args.max_steps,
+        stop: Some(signalled.clone()),
+    };
+    let result = match shard {
+        Some(shard) => splinerod::run::runner::run_shard(&scene, &mut refs, shard, &control)?,
+        None => splinerod::run::runner::run_controlled(&scene, &mut refs, &control)?,
     };
     print!("{}", result.summary());
-    match &args.json {
-        Some(path) => write_json(path, &result),
-        None => Ok(()),
+    if let Some(path) = &args.json {
+        write_json(path, &result)?;
     }
+    if signalled.load(Ordering::SeqCst) {
+        eprintln!(
+            "interrupted: stopped at t = {} s after {} steps",
+            result.time, result.steps
+        );
+        return Ok(ExitCode::from(INTERRUPTED));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// SIGINT and SIGTERM raise `flag` (the run stops at the end of its step and writes
+/// its outputs); a second one ends the process at once with the interrupted code.
+fn stop_on_signals(flag: &Arc<AtomicBool>) -> Result<(), Error> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    for signal in [SIGINT, SIGTERM] {
+        let installed = signal_hook::flag::register_conditional_shutdown(
+            signal,
+            INTERRUPTED.into(),
+            flag.clone(),
+        )
+        .and_then(|_| signal_hook::flag::register(signal, flag.clone()));
+        installed.map_err(|source| Error::Io {
+            path: "signal handler".into(),
+            source,
+        })?;
+    }
+    Ok(())
 }

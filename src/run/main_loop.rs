@@ -13,7 +13,7 @@ use crate::run::ensemble::summarize;
 use crate::run::knot_track::KnotTrack;
 use crate::run::observe::Observer;
 use crate::run::runner::{finish, frame, notify_finish, probes_at_start, ContactStats, Probe};
-use crate::run::runner::{RunResult, SolverTotals};
+use crate::run::runner::{RunControl, RunResult, SolverTotals};
 use crate::scene::{Method, Scene};
 use crate::world::estimate::EstimateOutput;
 use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
@@ -21,6 +21,9 @@ use splinerod_core::Real;
 use splinerod_energies::EnergySummary;
 use std::ops::Range;
 use std::time::Instant;
+
+/// Step times reserved up front (more grow the vector as the run goes).
+const STEP_TIMES_RESERVED: usize = 1 << 16;
 
 /// What a member accumulated besides its final state.
 pub(crate) struct Tally {
@@ -213,7 +216,12 @@ pub(crate) fn run_scene(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
     only: Option<&Range<usize>>,
+    control: &RunControl,
 ) -> Result<RunResult, Error> {
+    match only {
+        Some(range) => scene.with_member_count(range.len()).check_memory()?,
+        None => scene.check_memory()?,
+    }
     let mut members = Vec::new();
     let mut sims = Vec::new();
     let first_index = only.map_or(0, |r| r.start);
@@ -239,9 +247,14 @@ pub(crate) fn run_scene(
     } else {
         (scene.step_count(), scene.solver.dt.unwrap_or_default())
     };
-    let mut step_seconds = Vec::with_capacity(stages);
+    let mut step_seconds = Vec::with_capacity(stages.min(STEP_TIMES_RESERVED));
+    let mut interrupted = false;
     let start = Instant::now();
-    for _ in 0..stages {
+    for stage in 0..stages {
+        if control.stops_before(stage) {
+            interrupted = true;
+            break;
+        }
         let stage_start = Instant::now();
         let advanced = if statics {
             ensemble.settle()
@@ -290,6 +303,7 @@ pub(crate) fn run_scene(
     tally.solver = solver;
     let mut result = finish(scene, lead, tally, wall, &mut step_seconds)?;
     result.ensemble = summaries;
+    result.interrupted = interrupted;
     notify_finish(
         observers,
         &frame(scene, &lead.system, lead.time, lead.steps),

@@ -206,6 +206,37 @@ pub struct RunResult {
     /// The error estimate (tolerance-driven `[adaptivity]`, or `output.error_estimate`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adaptivity: Option<EstimateOutput>,
+    /// Whether the run stopped before its duration ([`RunControl`]: a signal, a stop
+    /// flag or `--max-steps`); absent from the JSON when it ran to its end.
+    #[serde(skip_serializing_if = "is_false")]
+    pub interrupted: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+/// How a run may end before its duration: after a number of steps, or when a flag is
+/// raised (by a signal handler or another thread). Either way the run stops at the end
+/// of the step under way and its result, observers and outputs are complete, with
+/// [`RunResult::interrupted`] set. The default runs to the end.
+#[derive(Debug, Clone, Default)]
+pub struct RunControl {
+    /// Take at most this many steps.
+    pub max_steps: Option<usize>,
+    /// Stop once this is true (checked before each step).
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+}
+
+impl RunControl {
+    /// Whether the run must stop before taking step `step` (0-based).
+    pub fn stops_before(&self, step: usize) -> bool {
+        let raised = self
+            .stop
+            .as_ref()
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::SeqCst));
+        raised || self.max_steps.is_some_and(|m| step >= m)
+    }
 }
 
 /// Runs `scene` to its end.
@@ -218,7 +249,16 @@ pub fn run_observed(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
 ) -> Result<RunResult, Error> {
-    crate::run::main_loop::run_scene(scene, observers, None)
+    run_controlled(scene, observers, &RunControl::default())
+}
+
+/// [`run_observed`], stopping early as `control` says.
+pub fn run_controlled(
+    scene: &Scene,
+    observers: &mut [&mut dyn Observer],
+    control: &RunControl,
+) -> Result<RunResult, Error> {
+    crate::run::main_loop::run_scene(scene, observers, None, control)
 }
 
 /// Runs shard `shard` of the `[ensemble]` of `scene` (see [`crate::run::shard`]): its
@@ -227,9 +267,10 @@ pub fn run_shard(
     scene: &Scene,
     observers: &mut [&mut dyn Observer],
     shard: Shard,
+    control: &RunControl,
 ) -> Result<RunResult, Error> {
     let members = shard.members(scene)?;
-    let mut result = crate::run::main_loop::run_scene(scene, observers, Some(&members))?;
+    let mut result = crate::run::main_loop::run_scene(scene, observers, Some(&members), control)?;
     result.shard = Some(shard.info(scene, &members));
     Ok(result)
 }
@@ -336,6 +377,7 @@ pub(crate) fn finish(
         knot: tally.knot,
         stage_seconds: tally.stages,
         adaptivity: tally.estimates,
+        interrupted: false,
     })
 }
 

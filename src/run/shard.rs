@@ -138,13 +138,16 @@ pub fn merge(shards: &[Value]) -> Result<Value, Error> {
     combine(&ordered)
 }
 
-/// Shard 1's result with every shard's members, solver totals and wall time.
+/// Shard 1's result with every shard's members, solver totals and wall time (and
+/// `interrupted` if any shard was).
 fn combine(ordered: &[&Value]) -> Result<Value, Error> {
     let mut merged = ordered[0].clone();
     let mut members = Vec::new();
     let (mut solver, mut wall) = (SolverTotals::default(), 0.0);
+    let mut interrupted = false;
     for shard in ordered {
         let part = |key: &str| shard.get(key).cloned().unwrap_or(Value::Null);
+        interrupted |= part("interrupted").as_bool().unwrap_or(false);
         if let Value::Array(list) = part("ensemble") {
             members.extend(list);
         }
@@ -156,6 +159,9 @@ fn combine(ordered: &[&Value]) -> Result<Value, Error> {
         map.insert("ensemble".into(), Value::Array(members));
         map.insert("solver".into(), serde_json::to_value(solver)?);
         map.insert("wall_seconds".into(), wall.into());
+        if interrupted {
+            map.insert("interrupted".into(), true.into());
+        }
     }
     Ok(merged)
 }
