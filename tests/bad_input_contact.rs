@@ -159,6 +159,12 @@ fn bad_radius() {
     assert_needs_positive_in(BASE, "radius", "rod.radius");
     // Also without contact: the radius is range-checked on its own.
     assert_needs_positive_in(&without_contact(BASE), "radius", "rod.radius");
+    // A rod is thin: a radius above half the rest length (1 m here) is a typo (the
+    // fuzzer's 1e300 made a run that could not finish).
+    for value in ["0.6", "1e300"] {
+        assert_field(&rejected(&set_in(BASE, "radius", value)), "rod.radius");
+    }
+    accepted(&set_in(BASE, "radius", "0.5"));
 }
 
 /// `rod.radius` is range-checked whether or not contact uses it (README: finite, > 0),

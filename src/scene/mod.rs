@@ -358,6 +358,13 @@ impl Scene {
         }
         if let Some(radius) = self.rod.radius {
             positive("rod.radius", radius)?;
+            if radius > 0.5 * self.rod.rest_length {
+                let reason = format!(
+                    "must be at most half the rest length ({} m): a rod is thin",
+                    self.rod.rest_length
+                );
+                return Err(Error::field("rod.radius", radius, reason));
+            }
             // Contact samples the rod every 0.2 r: keep their number sane.
             let samples = self.rod.rest_length / (0.2 * radius);
             if samples > 1e7 {
