@@ -27,6 +27,8 @@ fn quick_bench_reports_every_key() {
         "bytes_per_cp",
         "stiff_catenary_settle_s",
         "knot_step_us",
+        "checkpoint_us_16",
+        "checkpoint_bytes_16",
     ] {
         let v = json[key].as_f64().unwrap_or(f64::NAN);
         assert!(v.is_finite() && v > 0.0, "{key} = {v}");

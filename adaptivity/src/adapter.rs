@@ -112,6 +112,18 @@ impl std::fmt::Debug for Adapter {
 }
 
 impl Adapter {
+    /// The knots protected from removal for a while (coordinate, adapt steps left): the
+    /// adapter's memory between steps (checkpoints save it).
+    pub fn protected(&self) -> &[(Real, usize)] {
+        &self.protected
+    }
+
+    /// Puts back a saved [`protected`](Self::protected) list.
+    pub fn set_protected(&mut self, protected: &[(Real, usize)]) {
+        self.protected.clear();
+        self.protected.extend_from_slice(protected);
+    }
+
     /// An adapter with the given limits and no criteria.
     pub fn new(params: AdaptParams) -> Result<Self, AdaptError> {
         params.validate()?;

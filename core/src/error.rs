@@ -6,6 +6,10 @@ use crate::Real;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum CoreError {
+    /// Saved run state does not fit the object reading it (a checkpoint of another
+    /// build or scene); says what did not fit.
+    #[error("saved state does not fit: {0}")]
+    StateMismatch(&'static str),
     /// The polynomial degree is outside the supported range.
     #[error("degree {degree} is not supported (allowed: 1 to {max})")]
     InvalidDegree {

@@ -48,6 +48,7 @@ pub mod quadrature;
 pub mod refine;
 pub mod rod;
 pub mod segments;
+pub mod state;
 
 /// The scalar type of every physical quantity.
 pub type Real = f64;
@@ -66,6 +67,7 @@ pub use quadrature::{GaussLegendre, QuadPoint, QuadratureTable};
 pub use refine::RefinementOperator;
 pub use rod::{Material, Rod};
 pub use segments::Segment;
+pub use state::{SavedState, StateReader};
 
 /// Which second derivative an energy adds to a Newton matrix.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -58,7 +58,7 @@ use pair::pair_rows;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::rod::{non_negative, positive};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, Real, Rod};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, Real, Rod, SavedState, StateReader};
 use std::sync::{Mutex, MutexGuard};
 
 /// Settings of [`Contact`]. All lengths in m.
@@ -435,6 +435,16 @@ impl Energy for Contact {
 
     fn drive(&mut self, t: Real) {
         self.move_obstacles(t);
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        let detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
+        detector.save_state(out);
+    }
+
+    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.load_state(rod, input)
     }
 
     fn time_dependent(&self) -> bool {

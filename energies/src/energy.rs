@@ -1,7 +1,9 @@
 //! The [`Energy`] trait and its finite-difference Hessian default.
 
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod};
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod, SavedState, StateReader,
+};
 
 use crate::ContactSummary;
 
@@ -156,6 +158,20 @@ pub trait Energy: Send + Sync {
     /// starts from: freeze per-step data here (contact freezes its friction anchors).
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
         let _ = (rod, dt);
+        Ok(())
+    }
+
+    /// Appends what this energy keeps between steps that the rod does not determine
+    /// (multipliers, a transported frame, a neighbour list whose rounding results depend
+    /// on), for a checkpoint ([`splinerod_core::state`]). Default: nothing.
+    fn save_state(&self, out: &mut SavedState) {
+        let _ = out;
+    }
+
+    /// Reads back what [`save_state`](Energy::save_state) wrote, into a copy built like
+    /// this one and brought to the same knots; `rod` is the restored rod.
+    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        let _ = (rod, input);
         Ok(())
     }
 

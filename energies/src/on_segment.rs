@@ -29,7 +29,9 @@
 
 use crate::{Energy, EnergySummary};
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, KnotOperation, Real, Rod};
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, KnotMap, KnotOperation, Real, Rod, SavedState, StateReader,
+};
 use std::sync::Mutex;
 
 /// An energy of one segment of a joined rod (module docs).
@@ -253,6 +255,18 @@ impl Energy for OnSegment {
             inner,
             copies: Mutex::new(Copies { main, other: None }),
         }))
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        self.inner.save_state(out);
+    }
+
+    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
+        match copy_for(copies, rod, self.segment) {
+            Some(local) => self.inner.load_state(&local.rod, input),
+            None => Err(CoreError::StateMismatch("a segment the rod does not have")),
+        }
     }
 
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {

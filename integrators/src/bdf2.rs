@@ -36,7 +36,7 @@ use crate::midpoint::midpoint_step;
 use crate::newton::NewtonParams;
 use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
-use splinerod_core::{Real, Rod};
+use splinerod_core::{Real, Rod, SavedState, StateReader};
 
 /// Largest ratio between consecutive step lengths the history survives (zero stability
 /// of variable-step BDF2 needs ω < 1 + √2; sub-stepping changes the step by 2 or ½).
@@ -126,6 +126,35 @@ impl Bdf2 {
 impl Integrator for Bdf2 {
     fn name(&self) -> &str {
         "bdf2"
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        let h = &self.history;
+        out.int(u64::from(h.valid));
+        out.real(h.dt);
+        for field in [&h.previous_q, &h.previous_v, &h.left_q, &h.left_v] {
+            out.vectors(field);
+        }
+    }
+
+    fn load_state(
+        &mut self,
+        rod: &Rod,
+        input: &mut StateReader<'_>,
+    ) -> Result<(), IntegratorError> {
+        let h = &mut self.history;
+        h.valid = input.int()? == 1;
+        h.dt = input.real()?;
+        for field in [
+            &mut h.previous_q,
+            &mut h.previous_v,
+            &mut h.left_q,
+            &mut h.left_v,
+        ] {
+            input.vectors_into(field)?;
+        }
+        h.epoch = rod.topology_epoch();
+        Ok(())
     }
 
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {

@@ -53,7 +53,7 @@ pub use newton::NewtonParams;
 pub use statics::{StaticParams, StaticSolver, CONSTRAINT_TOLERANCE, MAX_MULTIPLIER_UPDATES};
 
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod};
+use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod, SavedState, StateReader};
 
 /// What an integrator needs of a mechanical system: a rod (state, mass, damping), its
 /// pins and its total potential energy with derivatives.
@@ -174,5 +174,20 @@ pub trait Integrator: Send + Sync {
     /// the integrator does not compute them).
     fn pin_forces(&self) -> Vec<Vector3<Real>> {
         Vec::new()
+    }
+    /// Appends what the scheme keeps between steps (a multistep scheme's history), for a
+    /// checkpoint ([`splinerod_core::state`]). Default: nothing.
+    fn save_state(&self, out: &mut SavedState) {
+        let _ = out;
+    }
+    /// Reads back what [`save_state`](Integrator::save_state) wrote, into a scheme built
+    /// like this one; `rod` is the restored rod.
+    fn load_state(
+        &mut self,
+        rod: &Rod,
+        input: &mut StateReader<'_>,
+    ) -> Result<(), IntegratorError> {
+        let _ = (rod, input);
+        Ok(())
     }
 }

@@ -15,6 +15,7 @@
 //! * the median step of the knot-tying scene, contact included ([`crate::bench::knot`]).
 
 pub mod adapt;
+pub mod checkpoint;
 pub mod knot;
 pub mod twist;
 pub mod world;
@@ -74,6 +75,11 @@ pub struct BenchResult {
     pub adapt_fraction_16: Real,
     /// The adapt stage's time per control point, ns, by size (1 000 and 100 000).
     pub adapt_ns_per_cp: BTreeMap<String, Real>,
+    /// Writing a checkpoint of the default scene after 100 steps, µs (median; encoding,
+    /// writing, `fsync`, rename).
+    pub checkpoint_us_16: Real,
+    /// That checkpoint's size, bytes.
+    pub checkpoint_bytes_16: Real,
 }
 
 /// The README's default scene, embedded.
@@ -247,7 +253,11 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let all = ensemble_rate(count, steps, threads)?;
     let (settle, n, error, steps) = stiff_catenary()?;
     let hard_cases_total = crate::problems::hard_cases::hard_cases()?.len();
+    let (checkpoint_s, checkpoint_bytes) =
+        crate::bench::checkpoint::checkpoint_cost(scale(200, 20))?;
     Ok(BenchResult {
+        checkpoint_us_16: checkpoint_s * 1e6,
+        checkpoint_bytes_16: checkpoint_bytes as Real,
         step_us_16,
         step_us_16_bending,
         step_us_16_twist,

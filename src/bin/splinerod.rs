@@ -11,7 +11,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
+use splinerod::run::checkpoint::CheckpointPlan;
 use splinerod::run::runner::RunControl;
+use splinerod::run::shard::Shard;
 use splinerod::{Error, Observer};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -32,7 +34,16 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Runs a scene to its end, prints a summary and optionally writes outputs.
-    Run(RunArgs),
+    Run(Box<RunArgs>),
+    /// Continues a run from its checkpoint (`run --checkpoint DIR`), with the same
+    /// outputs, to the end of its scene (or --max-steps).
+    Resume {
+        /// The checkpoint directory.
+        dir: PathBuf,
+        /// Stops after N steps in all (counted from the run's start).
+        #[arg(long, value_name = "N")]
+        max_steps: Option<usize>,
+    },
     /// Combines the JSON results of `run --shard K/N` (all N shards) into the result of
     /// one run of the whole ensemble.
     Merge {
@@ -105,6 +116,26 @@ struct RunArgs {
     /// points, samples, memory, work) instead of refusing it.
     #[arg(long)]
     allow_large: bool,
+    /// Writes checkpoints into DIR (every --checkpoint-every seconds of wall-clock time,
+    /// and where the run stops); `splinerod resume DIR` continues the run.
+    #[arg(long, value_name = "DIR")]
+    checkpoint: Option<PathBuf>,
+    /// Wall-clock seconds between checkpoints.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 300.0,
+        requires = "checkpoint"
+    )]
+    checkpoint_every: f64,
+}
+
+/// A `run` command line on its own (how `resume` reads the checkpointed one).
+#[derive(Parser)]
+#[command(name = "run")]
+struct RunLine {
+    #[command(flatten)]
+    args: RunArgs,
 }
 
 /// Exit code of a run stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report).
@@ -122,7 +153,8 @@ fn main() -> ExitCode {
 
 fn execute(cli: Cli) -> Result<ExitCode, Error> {
     match cli.command {
-        Command::Run(args) => run(args),
+        Command::Run(args) => run(*args, run_arguments()),
+        Command::Resume { dir, max_steps } => resume(&dir, max_steps),
         Command::Report { quick, out } => {
             let report = splinerod::report::write_report(&out, quick)?;
             println!(
@@ -201,6 +233,10 @@ fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
     );
     println!("memory: {:.0} bytes per control point", b.bytes_per_cp);
     println!(
+        "checkpoint of the default scene after 100 steps: {:.0} bytes, written in {:.0} µs",
+        b.checkpoint_bytes_16, b.checkpoint_us_16
+    );
+    println!(
         "stiff catenary (EA = 1e4) settled to {:.2e} m with {} control points in {} steps, {:.3} s",
         b.stiff_catenary.1, b.stiff_catenary.0, b.stiff_catenary.2, b.stiff_catenary_settle_s
     );
@@ -250,10 +286,22 @@ fn observers(args: &RunArgs) -> Result<Vec<Box<dyn Observer>>, Error> {
     Ok(list)
 }
 
-fn run(args: RunArgs) -> Result<ExitCode, Error> {
+/// The command line after `run`, as given.
+fn run_arguments() -> Vec<String> {
+    std::env::args()
+        .skip_while(|a| a != "run")
+        .skip(1)
+        .collect()
+}
+
+fn run(args: RunArgs, line: Vec<String>) -> Result<ExitCode, Error> {
+    let text = std::fs::read_to_string(&args.scene).map_err(|source| Error::Io {
+        path: args.scene.display().to_string(),
+        source,
+    })?;
     let scene = splinerod::Scene::load(&args.scene)?;
     let shard = match &args.shard {
-        Some(text) => Some(splinerod::run::shard::Shard::parse(text)?),
+        Some(text) => Some(Shard::parse(text)?),
         None => None,
     };
     if !args.allow_large {
@@ -264,7 +312,82 @@ fn run(args: RunArgs) -> Result<ExitCode, Error> {
         }
         .check_limits(&limits)?;
     }
-    let mut boxed = observers(&args)?;
+    let plan = checkpoint_plan(&args, text, line, shard.as_ref())?;
+    execute_run(
+        &args,
+        |observers, control| match shard {
+            Some(shard) => splinerod::run::runner::run_shard(&scene, observers, shard, control),
+            None => splinerod::run::runner::run_controlled(&scene, observers, control),
+        },
+        plan,
+        args.max_steps,
+    )
+}
+
+/// `splinerod resume DIR`: the checkpointed command line's outputs, continued.
+fn resume(dir: &std::path::Path, max_steps: Option<usize>) -> Result<ExitCode, Error> {
+    let saved = splinerod::run::checkpoint::resumable(dir)?;
+    let line = std::iter::once("run".to_string()).chain(saved.args.iter().cloned());
+    let parsed = RunLine::try_parse_from(line).map_err(|e| {
+        Error::field(
+            "checkpoint",
+            dir.display(),
+            format!("its command line: {e}"),
+        )
+    })?;
+    let args = parsed.args;
+    let shard = saved.shard.map(|(index, count)| Shard { index, count });
+    let plan = checkpoint_plan(&args, saved.scene, saved.args, shard.as_ref())?;
+    // The checkpointed run's own --max-steps ended that invocation, not the run.
+    execute_run(
+        &args,
+        |observers, control| splinerod::run::runner::resume(dir, observers, control),
+        plan,
+        max_steps,
+    )
+}
+
+/// The checkpoints `args` ask for (`scene`: the scene's text; `line`: the command line).
+fn checkpoint_plan(
+    args: &RunArgs,
+    scene: String,
+    line: Vec<String>,
+    shard: Option<&Shard>,
+) -> Result<Option<CheckpointPlan>, Error> {
+    let Some(dir) = &args.checkpoint else {
+        return Ok(None);
+    };
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
+        let reason = "must be a finite number of seconds, at least 0";
+        return Err(Error::field(
+            "--checkpoint-every",
+            args.checkpoint_every,
+            reason,
+        ));
+    }
+    if args.gif.is_some() {
+        let reason =
+            "a GIF cannot be continued after a resume: use --frames and assemble the pictures";
+        return Err(Error::field("--gif", "given", reason));
+    }
+    Ok(Some(CheckpointPlan {
+        dir: dir.clone(),
+        every_seconds: args.checkpoint_every,
+        scene,
+        args: line,
+        shard: shard.map(|s| (s.index, s.count)),
+    }))
+}
+
+/// Runs `go` with the outputs `args` ask for, stopping on signals and after
+/// `max_steps`; prints the summary, writes the JSON; exit 130 if a signal stopped it.
+fn execute_run(
+    args: &RunArgs,
+    go: impl FnOnce(&mut [&mut dyn Observer], &RunControl) -> Result<splinerod::RunResult, Error>,
+    plan: Option<CheckpointPlan>,
+    max_steps: Option<usize>,
+) -> Result<ExitCode, Error> {
+    let mut boxed = observers(args)?;
     let mut refs: Vec<&mut dyn Observer> = Vec::with_capacity(boxed.len());
     for b in boxed.iter_mut() {
         refs.push(b.as_mut());
@@ -272,13 +395,11 @@ fn run(args: RunArgs) -> Result<ExitCode, Error> {
     let signalled = Arc::new(AtomicBool::new(false));
     stop_on_signals(&signalled)?;
     let control = RunControl {
-        max_steps: args.max_steps,
+        max_steps,
         stop: Some(signalled.clone()),
+        checkpoint: plan,
     };
-    let result = match shard {
-        Some(shard) => splinerod::run::runner::run_shard(&scene, &mut refs, shard, &control)?,
-        None => splinerod::run::runner::run_controlled(&scene, &mut refs, &control)?,
-    };
+    let result = go(&mut refs, &control)?;
     print!("{}", result.summary());
     if let Some(path) = &args.json {
         write_json(path, &result)?;

@@ -19,7 +19,7 @@ pub(crate) const CAPTION: f64 = 34.0;
 const STRETCH: Real = 1.1;
 
 /// How the 3-D rod is projected onto the picture.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Camera {
     /// x right, y up (seen from +z).
     Xy,
@@ -71,7 +71,7 @@ impl Camera {
 }
 
 /// A camera with a fixed framing: where world points land on the picture.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct View {
     /// The projection.
     pub camera: Camera,

@@ -348,6 +348,28 @@ impl Observer for Pictures {
         Ok(())
     }
 
+    fn checkpoint(&mut self) -> Result<Option<String>, Error> {
+        let state = serde_json::json!({
+            "view": self.view,
+            "frames": self.frames,
+            "written_step": self.written_step,
+        });
+        Ok(Some(state.to_string()))
+    }
+
+    fn resume(&mut self, _frame: &Frame<'_>, state: Option<&str>) -> Result<(), Error> {
+        let bad = || Error::field("checkpoint", self.dir.display(), "no pictures state");
+        if self.gif.is_some() {
+            let reason = "a GIF cannot be continued after a resume";
+            return Err(Error::field("--gif", "given", reason));
+        }
+        let state: serde_json::Value = serde_json::from_str(state.ok_or_else(bad)?)?;
+        self.view = serde_json::from_value(state["view"].clone())?;
+        self.frames = serde_json::from_value(state["frames"].clone())?;
+        self.written_step = serde_json::from_value(state["written_step"].clone())?;
+        Ok(())
+    }
+
     fn finish(&mut self, frame: &Frame<'_>, _: &RunResult) -> Result<(), Error> {
         // The last state, unless its step was drawn already (a static solve's one stage
         // is step 0 and is drawn by `step`).

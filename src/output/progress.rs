@@ -36,6 +36,14 @@ impl Observer for Progress {
         Ok(())
     }
 
+    fn resume(&mut self, frame: &Frame<'_>, _state: Option<&str>) -> Result<(), Error> {
+        self.start(frame)?;
+        if let Some(bar) = &self.bar {
+            bar.set_position(frame.step as u64);
+        }
+        Ok(())
+    }
+
     fn step(&mut self, frame: &Frame<'_>, _report: &StepReport, _wall: Real) -> Result<(), Error> {
         if let Some(bar) = &self.bar {
             bar.set_position(frame.step as u64);

@@ -8,7 +8,7 @@ use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, StageTimes, StepReport};
 use splinerod_core::Real;
 use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 /// Writes one CSV row per step.
@@ -44,13 +44,28 @@ impl StatsWriter {
         let mut partial = path.as_os_str().to_owned();
         partial.push(".partial");
         let partial = PathBuf::from(partial);
-        let file = File::create(&partial).map_err(|e| io_error(&partial, e))?;
+        // Appending, not truncated yet: a resumed run continues what is there (`start`
+        // empties it).
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&partial)
+            .map_err(|e| io_error(&partial, e))?;
         Ok(Self {
             path: path.to_path_buf(),
             writer: Some(csv::Writer::from_writer(BufWriter::new(file))),
             partial,
             energies: Vec::new(),
         })
+    }
+
+    /// Cuts the partial file to `bytes` (after flushing what is buffered).
+    fn truncate(&mut self, bytes: u64) -> Result<(), Error> {
+        let path = self.partial.clone();
+        let writer = self.writer()?;
+        writer.flush().map_err(|e| io_error(&path, e))?;
+        let file = writer.get_ref().get_ref();
+        file.set_len(bytes).map_err(|e| io_error(&path, e))
     }
 
     fn writer(&mut self) -> Result<&mut csv::Writer<BufWriter<File>>, Error> {
@@ -97,10 +112,42 @@ impl Observer for StatsWriter {
         header.push("wall_seconds".into());
         let stages = StageTimes::NAMES.iter().map(|n| format!("{n}_seconds"));
         header.extend(stages);
+        self.truncate(0)?;
         let path = self.partial.clone();
         self.writer()?
             .write_record(&header)
             .map_err(|e| csv_error(&path, e))
+    }
+
+    fn checkpoint(&mut self) -> Result<Option<String>, Error> {
+        let path = self.partial.clone();
+        let writer = self.writer()?;
+        writer.flush().map_err(|e| io_error(&path, e))?;
+        let file = writer.get_ref().get_ref();
+        let bytes = file.metadata().map_err(|e| io_error(&path, e))?.len();
+        let state = serde_json::json!({ "bytes": bytes, "energies": self.energies });
+        Ok(Some(state.to_string()))
+    }
+
+    fn resume(&mut self, _frame: &Frame<'_>, state: Option<&str>) -> Result<(), Error> {
+        let bad = || Error::field("checkpoint", self.path.display(), "no statistics state");
+        let state: serde_json::Value = serde_json::from_str(state.ok_or_else(bad)?)?;
+        let bytes = state["bytes"].as_u64().ok_or_else(bad)?;
+        self.energies = serde_json::from_value(state["energies"].clone())?;
+        let here = std::fs::metadata(&self.partial).map_or(0, |m| m.len());
+        if here < bytes {
+            // The run that wrote the checkpoint finished its file: continue from it.
+            let text = std::fs::read(&self.path).map_err(|e| io_error(&self.path, e))?;
+            let kept = text.get(..bytes as usize).ok_or_else(|| {
+                let short = std::io::Error::other("shorter than at the checkpoint");
+                io_error(&self.path, short)
+            })?;
+            self.truncate(0)?;
+            let path = self.partial.clone();
+            let mut file: &File = self.writer()?.get_ref().get_ref();
+            file.write_all(kept).map_err(|e| io_error(&path, e))?;
+        }
+        self.truncate(bytes)
     }
 
     fn step(&mut self, frame: &Frame<'_>, report: &StepReport, wall: Real) -> Result<(), Error> {

@@ -154,6 +154,19 @@ impl Observer for VtkWriter {
         Ok(())
     }
 
+    fn checkpoint(&mut self) -> Result<Option<String>, Error> {
+        let state = serde_json::json!({ "timesteps": self.timesteps, "last_step": self.last_step });
+        Ok(Some(state.to_string()))
+    }
+
+    fn resume(&mut self, _frame: &Frame<'_>, state: Option<&str>) -> Result<(), Error> {
+        let bad = || Error::field("checkpoint", self.dir.display(), "no ParaView state");
+        let state: serde_json::Value = serde_json::from_str(state.ok_or_else(bad)?)?;
+        self.timesteps = serde_json::from_value(state["timesteps"].clone())?;
+        self.last_step = serde_json::from_value(state["last_step"].clone())?;
+        Ok(())
+    }
+
     fn finish(&mut self, frame: &Frame<'_>, _result: &RunResult) -> Result<(), Error> {
         if self.last_step != Some(frame.step) {
             self.record(frame)?;

@@ -13,7 +13,7 @@ const SAMPLES: usize = 400;
 
 /// Tightness of the knot over time. A missing knot (no crossings seen) is recorded as
 /// `null` entries.
-#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct KnotTrack {
     /// Times, s.
     pub t: Vec<Real>,

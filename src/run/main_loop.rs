@@ -9,6 +9,7 @@
 //! knot tracking, due cuts, the control-point history, probes — and observers see
 //! member 0. Cuts due at the start (all of them for a static scene) are made first.
 
+use crate::run::checkpoint::{Checkpoint, CheckpointPlan, MemberState};
 use crate::run::ensemble::summarize;
 use crate::run::knot_track::KnotTrack;
 use crate::run::observe::Observer;
@@ -26,6 +27,7 @@ use std::time::Instant;
 const STEP_TIMES_RESERVED: usize = 1 << 16;
 
 /// What a member accumulated besides its final state.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Tally {
     pub(crate) solver: SolverTotals,
     pub(crate) probes: Vec<Probe>,
@@ -126,6 +128,7 @@ impl Tally {
 }
 
 /// The scene's cuts in time order, applied once each.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct CutSchedule {
     cuts: Vec<(Real, Real)>,
     next: usize,
@@ -210,6 +213,18 @@ fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Resul
     }
 }
 
+/// A run under way: its members, the loop's counters and what it measured.
+struct Run {
+    members: Vec<Member>,
+    ensemble: Ensemble,
+    step_seconds: Vec<Real>,
+    /// Stages done.
+    stage: usize,
+    /// Wall time of the stages a checkpointed run did before this process.
+    wall_before: Real,
+    only: Option<Range<usize>>,
+}
+
 /// Runs `scene` to its end (only the ensemble members of `only`, if given), showing
 /// every stage of its first member to `observers`.
 pub(crate) fn run_scene(
@@ -218,13 +233,19 @@ pub(crate) fn run_scene(
     only: Option<&Range<usize>>,
     control: &RunControl,
 ) -> Result<RunResult, Error> {
-    match only {
-        Some(range) => scene.with_member_count(range.len()).check_memory()?,
-        None => scene.check_memory()?,
+    check_memory(scene, only)?;
+    let run = fresh_run(scene, only)?;
+    let lead = &run.ensemble.members[0];
+    for o in observers.iter_mut() {
+        o.start(&frame(scene, &lead.system, lead.time, 0))?;
     }
+    advance(scene, run, observers, control)
+}
+
+/// The members of `scene` (of `only`) built, prepared and tallied at their start.
+fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Run, Error> {
     let mut members = Vec::new();
     let mut sims = Vec::new();
-    let first_index = only.map_or(0, |r| r.start);
     for (member_scene, mut sim) in build_members(scene, only)? {
         let mut cuts = CutSchedule::new(&member_scene);
         prepare(&member_scene, &mut sim, &mut cuts)?;
@@ -236,60 +257,223 @@ pub(crate) fn run_scene(
         });
         sims.push(sim);
     }
-    let mut ensemble = Ensemble::new(sims);
-    let lead = &ensemble.members[0];
-    for o in observers.iter_mut() {
-        o.start(&frame(scene, &lead.system, lead.time, 0))?;
+    Ok(Run {
+        members,
+        ensemble: Ensemble::new(sims),
+        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
+        stage: 0,
+        wall_before: 0.0,
+        only: only.cloned(),
+    })
+}
+
+/// The cost of a checkpoint (`bench` key `checkpoint_us_16`): `scene` run for `steps`
+/// steps, then its checkpoint written into `plan.dir` `repeats` times; the median
+/// write's wall time (s, encoding, writing, `fsync` and rename) and the file's size.
+pub(crate) fn checkpoint_cost(
+    scene: &Scene,
+    steps: usize,
+    plan: &CheckpointPlan,
+    repeats: usize,
+) -> Result<(Real, u64), Error> {
+    let mut run = fresh_run(scene, None)?;
+    let dt = scene.solver.dt.unwrap_or_default();
+    for _ in 0..steps {
+        stage(scene, &mut run, &mut [], false, dt)?;
     }
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        save(plan, &run, &mut [], start)?;
+        times.push(start.elapsed().as_secs_f64());
+    }
+    let path = plan.dir.join(crate::run::checkpoint::FILE);
+    let bytes = std::fs::metadata(&path).map_err(|source| Error::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    Ok((crate::run::runner::median(&mut times), bytes.len()))
+}
+
+/// Continues the run of `checkpoint` (of `scene`, its scene text parsed).
+pub(crate) fn resume_scene(
+    scene: &Scene,
+    checkpoint: Checkpoint,
+    observers: &mut [&mut dyn Observer],
+    control: &RunControl,
+) -> Result<RunResult, Error> {
+    let only = checkpoint.only.map(|(a, b)| a..b);
+    check_memory(scene, only.as_ref())?;
+    let built = build_members(scene, only.as_ref())?;
+    if built.len() != checkpoint.members.len() || observers.len() != checkpoint.observers.len() {
+        return Err(Error::field(
+            "checkpoint",
+            checkpoint.members.len(),
+            "members or outputs do not match the scene and command line",
+        ));
+    }
+    let mut members = Vec::new();
+    let mut sims = Vec::new();
+    for ((member_scene, mut sim), state) in built.into_iter().zip(checkpoint.members) {
+        sim.restore_state(&state.simulation)?;
+        members.push(Member {
+            scene: member_scene,
+            tally: state.tally,
+        });
+        sims.push(sim);
+    }
+    let run = Run {
+        members,
+        ensemble: Ensemble::new(sims),
+        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
+        stage: checkpoint.stage,
+        wall_before: checkpoint.wall_seconds,
+        only,
+    };
+    let lead = &run.ensemble.members[0];
+    let now = frame(scene, &lead.system, lead.time, lead.steps);
+    for (o, state) in observers.iter_mut().zip(&checkpoint.observers) {
+        o.resume(&now, state.as_deref())?;
+    }
+    advance(scene, run, observers, control)
+}
+
+/// Refuses a run whose memory could not exist (for a shard: its members only).
+fn check_memory(scene: &Scene, only: Option<&Range<usize>>) -> Result<(), Error> {
+    match only {
+        Some(range) => scene.with_member_count(range.len()).check_memory(),
+        None => scene.check_memory(),
+    }
+}
+
+/// The stages of `run` from where it stands to the end (or until `control` stops it,
+/// writing a checkpoint there if asked), then the result.
+fn advance(
+    scene: &Scene,
+    mut run: Run,
+    observers: &mut [&mut dyn Observer],
+    control: &RunControl,
+) -> Result<RunResult, Error> {
     let statics = scene.solver.method == Method::Static;
     let (stages, dt) = if statics {
         (1, 0.0)
     } else {
         (scene.step_count(), scene.solver.dt.unwrap_or_default())
     };
-    let mut step_seconds = Vec::with_capacity(stages.min(STEP_TIMES_RESERVED));
     let mut interrupted = false;
     let start = Instant::now();
-    for stage in 0..stages {
-        if control.stops_before(stage) {
+    let mut last_checkpoint = Instant::now();
+    while run.stage < stages {
+        if control.stops_before(run.stage) {
             interrupted = true;
+            if let Some(plan) = &control.checkpoint {
+                save(plan, &run, observers, start)?;
+            }
             break;
         }
-        let stage_start = Instant::now();
-        let advanced = if statics {
-            ensemble.settle()
-        } else {
-            ensemble.step(dt)
-        };
-        // A single run's error is its own, not an ensemble member's.
-        advanced.map_err(|e| match e {
-            Error::Member { source, .. } if scene.ensemble.is_none() => *source,
-            e => e,
-        })?;
-        let Ensemble {
-            members: sims,
-            reports,
-        } = &mut ensemble;
-        for ((m, sim), report) in members
-            .iter_mut()
-            .zip(sims.iter_mut())
-            .zip(reports.iter_mut())
-        {
-            report.stages.record = m.tally.record(&m.scene, sim, report, dt)?;
-            m.tally.stages += report.stages;
-        }
-        let wall = stage_start.elapsed().as_secs_f64();
-        step_seconds.push(wall);
-        let lead = &ensemble.members[0];
-        let now = frame(scene, &lead.system, lead.time, lead.steps);
-        for o in observers.iter_mut() {
-            o.step(&now, &ensemble.reports[0], wall)?;
+        stage(scene, &mut run, observers, statics, dt)?;
+        if let Some(plan) = &control.checkpoint {
+            if last_checkpoint.elapsed().as_secs_f64() >= plan.every_seconds {
+                save(plan, &run, observers, start)?;
+                last_checkpoint = Instant::now();
+            }
         }
     }
-    let wall = start.elapsed().as_secs_f64();
+    let wall = run.wall_before + start.elapsed().as_secs_f64();
+    conclude(scene, run, observers, wall, interrupted)
+}
+
+/// One stage of every member, recorded, shown to the observers.
+fn stage(
+    scene: &Scene,
+    run: &mut Run,
+    observers: &mut [&mut dyn Observer],
+    statics: bool,
+    dt: Real,
+) -> Result<(), Error> {
+    let stage_start = Instant::now();
+    let advanced = if statics {
+        run.ensemble.settle()
+    } else {
+        run.ensemble.step(dt)
+    };
+    // A single run's error is its own, not an ensemble member's.
+    advanced.map_err(|e| match e {
+        Error::Member { source, .. } if scene.ensemble.is_none() => *source,
+        e => e,
+    })?;
+    let Ensemble {
+        members: sims,
+        reports,
+    } = &mut run.ensemble;
+    for ((m, sim), report) in run
+        .members
+        .iter_mut()
+        .zip(sims.iter_mut())
+        .zip(reports.iter_mut())
+    {
+        report.stages.record = m.tally.record(&m.scene, sim, report, dt)?;
+        m.tally.stages += report.stages;
+    }
+    let wall = stage_start.elapsed().as_secs_f64();
+    run.step_seconds.push(wall);
+    run.stage += 1;
+    let lead = &run.ensemble.members[0];
+    let now = frame(scene, &lead.system, lead.time, lead.steps);
+    for o in observers.iter_mut() {
+        o.step(&now, &run.ensemble.reports[0], wall)?;
+    }
+    Ok(())
+}
+
+/// Writes the checkpoint of `run` as it stands.
+fn save(
+    plan: &CheckpointPlan,
+    run: &Run,
+    observers: &mut [&mut dyn Observer],
+    start: Instant,
+) -> Result<(), Error> {
+    let members = run.members.iter().zip(&run.ensemble.members);
+    let checkpoint = Checkpoint {
+        scene: plan.scene.clone(),
+        args: plan.args.clone(),
+        only: run.only.as_ref().map(|r| (r.start, r.end)),
+        shard: plan.shard,
+        stage: run.stage,
+        members: members
+            .map(|(m, sim)| MemberState {
+                simulation: sim.save_state(),
+                tally: m.tally.clone(),
+            })
+            .collect(),
+        wall_seconds: run.wall_before + start.elapsed().as_secs_f64(),
+        observers: observers
+            .iter_mut()
+            .map(|o| o.checkpoint())
+            .collect::<Result<_, _>>()?,
+    };
+    crate::run::checkpoint::write(&plan.dir, &checkpoint)
+}
+
+/// The result of a run whose stages are done (or stopped).
+fn conclude(
+    scene: &Scene,
+    run: Run,
+    observers: &mut [&mut dyn Observer],
+    wall: Real,
+    interrupted: bool,
+) -> Result<RunResult, Error> {
+    let Run {
+        mut members,
+        mut ensemble,
+        mut step_seconds,
+        only,
+        ..
+    } = run;
     for (m, sim) in members.iter_mut().zip(ensemble.members.iter_mut()) {
         m.tally.close(sim)?;
     }
+    let first_index = only.map_or(0, |r| r.start);
     let summaries = if scene.ensemble.is_some() {
         let all = members.iter().zip(&ensemble.members).enumerate();
         all.map(|(i, (m, sim))| summarize(first_index + i, &m.scene, sim, &m.tally))

@@ -3,6 +3,7 @@
 //! knot of knot scenes and gathers the [`runner::RunResult`]; [`observe`] is the
 //! interface outputs (pictures, VTK, statistics) plug into.
 
+pub mod checkpoint;
 pub mod ensemble;
 pub(crate) mod knot_track;
 pub(crate) mod main_loop;

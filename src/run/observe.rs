@@ -38,6 +38,20 @@ pub trait Observer {
         Ok(())
     }
 
+    /// Between two steps, for a checkpoint: what this observer needs to continue after a
+    /// resume (JSON text), or `None` for nothing. Default `None`.
+    fn checkpoint(&mut self) -> Result<Option<String>, Error> {
+        Ok(None)
+    }
+
+    /// Instead of [`start`](Observer::start), when a run continues from a checkpoint:
+    /// `state` is what [`checkpoint`](Observer::checkpoint) returned then, `frame` the
+    /// restored state. Default: nothing.
+    fn resume(&mut self, frame: &Frame<'_>, state: Option<&str>) -> Result<(), Error> {
+        let _ = (frame, state);
+        Ok(())
+    }
+
     /// At the end, with the run's result.
     fn finish(&mut self, frame: &Frame<'_>, result: &RunResult) -> Result<(), Error> {
         let _ = (frame, result);

@@ -28,7 +28,7 @@ pub struct Samples {
 }
 
 /// The trajectory of one material point.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct Probe {
     /// Material coordinate, fraction of the rest length.
     pub s: Real,
@@ -70,7 +70,7 @@ pub struct SolverTotals {
 }
 
 /// Contact over the run (scenes with `[contact]`).
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct ContactStats {
     /// Smallest clearance ratio seen at the start or at the end of any step: centre-line
     /// distance between touching parts over `2r`, or from an obstacle's surface over
@@ -222,10 +222,12 @@ fn is_false(b: &bool) -> bool {
 /// [`RunResult::interrupted`] set. The default runs to the end.
 #[derive(Debug, Clone, Default)]
 pub struct RunControl {
-    /// Take at most this many steps.
+    /// Take at most this many steps (counted from the run's start, also when resumed).
     pub max_steps: Option<usize>,
     /// Stop once this is true (checked before each step).
     pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// Write checkpoints (see [`crate::run::checkpoint`]), and one where the run stops.
+    pub checkpoint: Option<crate::run::checkpoint::CheckpointPlan>,
 }
 
 impl RunControl {
@@ -259,6 +261,25 @@ pub fn run_controlled(
     control: &RunControl,
 ) -> Result<RunResult, Error> {
     crate::run::main_loop::run_scene(scene, observers, None, control)
+}
+
+/// Continues the run checkpointed in `dir` (see [`crate::run::checkpoint`]) to its end,
+/// showing every step to `observers` (built from the checkpoint's command line, in the
+/// same order) and stopping early as `control` says. The result equals, bit for bit but
+/// for wall-clock times, that of the run never stopped.
+pub fn resume(
+    dir: &std::path::Path,
+    observers: &mut [&mut dyn Observer],
+    control: &RunControl,
+) -> Result<RunResult, Error> {
+    let checkpoint = crate::run::checkpoint::read(dir)?;
+    let scene = Scene::from_toml(&checkpoint.scene)?;
+    let (only, shard) = (checkpoint.only, checkpoint.shard);
+    let mut result = crate::run::main_loop::resume_scene(&scene, checkpoint, observers, control)?;
+    if let (Some((a, b)), Some((index, count))) = (only, shard) {
+        result.shard = Some(Shard { index, count }.info(&scene, &(a..b)));
+    }
+    Ok(result)
 }
 
 /// Runs shard `shard` of the `[ensemble]` of `scene` (see [`crate::run::shard`]): its

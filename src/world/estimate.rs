@@ -18,8 +18,11 @@
 use crate::{Error, RodSystem};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
+use splinerod_adaptivity::estimate::{Corner, SpanError};
 use splinerod_adaptivity::{AdaptError, ErrorEstimate, Estimator, FineProblem};
-use splinerod_core::{BlockBanded, HessianKind, Real, RefinementOperator, Rod};
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, Real, RefinementOperator, Rod, SavedState,
+};
 use splinerod_energies::Energy;
 use splinerod_integrators::linear::LinearSolver;
 
@@ -114,6 +117,79 @@ impl ErrorEstimation {
         s.knots.extend_from_slice(rod.basis().knots());
         s.interactions.clear();
         s.interactions.extend_from_slice(interactions);
+    }
+
+    /// The schedule, the last estimate and the step's acceleration, for a checkpoint.
+    pub(crate) fn save(&self) -> SavedState {
+        let mut out = SavedState::default();
+        let s = &self.schedule;
+        out.ints([s.interval as u64, s.since as u64].into_iter());
+        out.reals(&s.knots);
+        out.reals(&s.interactions);
+        out.real(s.error);
+        let e = &self.estimator.estimate;
+        out.int(e.control_points as u64);
+        out.real(e.global);
+        let spans = e
+            .spans
+            .iter()
+            .flat_map(|x| [x.start, x.end, x.error, x.midpoint]);
+        out.reals(&spans.collect::<Vec<_>>());
+        out.reals(
+            &e.corners
+                .iter()
+                .flat_map(|c| [c.at, c.error])
+                .collect::<Vec<_>>(),
+        );
+        out.ints(e.corners.iter().map(|c| c.multiplicity as u64));
+        out.vectors(&self.acceleration);
+        out
+    }
+
+    /// Reads back what [`save`](Self::save) wrote.
+    pub(crate) fn load(&mut self, saved: &SavedState) -> Result<(), Error> {
+        let bad = || Error::Core(CoreError::StateMismatch("an error estimate"));
+        let mut input = saved.reader();
+        let s = &mut self.schedule;
+        let counts = input.ints()?;
+        let [interval, since] = counts else {
+            return Err(bad());
+        };
+        (s.interval, s.since) = (*interval as usize, *since as usize);
+        input.reals_into(&mut s.knots)?;
+        input.reals_into(&mut s.interactions)?;
+        s.error = input.real()?;
+        let e = &mut self.estimator.estimate;
+        e.control_points = input.index()?;
+        e.global = input.real()?;
+        let mut xs = Vec::new();
+        input.reals_into(&mut xs)?;
+        e.spans = xs
+            .chunks_exact(4)
+            .map(|c| SpanError {
+                start: c[0],
+                end: c[1],
+                error: c[2],
+                midpoint: c[3],
+            })
+            .collect();
+        input.reals_into(&mut xs)?;
+        let multiplicities = input.ints()?;
+        if multiplicities.len() * 2 != xs.len() {
+            return Err(bad());
+        }
+        e.corners = xs
+            .chunks_exact(2)
+            .zip(multiplicities)
+            .map(|(c, &m)| Corner {
+                at: c[0],
+                error: c[1],
+                multiplicity: m as usize,
+            })
+            .collect();
+        input.vectors_into(&mut self.acceleration)?;
+        input.finish()?;
+        Ok(())
     }
 
     /// The latest estimate.
@@ -256,7 +332,7 @@ impl FineProblem for Mechanics<'_> {
 const HISTORY_INTERVAL: Real = 0.05;
 
 /// JSON `adaptivity`: the error estimate of a run.
-#[derive(Debug, Clone, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct EstimateOutput {
     /// The last estimate (after the last step), m.
     pub estimated_error: Real,

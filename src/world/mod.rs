@@ -11,6 +11,7 @@ pub(crate) mod ensemble;
 pub mod estimate;
 pub(crate) mod grab;
 pub mod path;
+pub mod saved;
 pub(crate) mod simulation;
 pub mod step_report;
 pub mod substep;

@@ -51,7 +51,7 @@ pub struct Simulation {
     /// Stage times of the step under way.
     pub(crate) clock: StageTimes,
     /// Length of the last step, s (the inertial load of the error estimate).
-    last_dt: Real,
+    pub(crate) last_dt: Real,
     saved_time: Real,
     saved_substep: SubstepMemory,
     interactions: Vec<Real>,

@@ -17,7 +17,7 @@ use std::ops::AddAssign;
 use crate::world::substep::SubstepCounts;
 
 /// Wall time of each stage of a step, s.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct StageTimes {
     /// Grabs and other drivers moving to their targets.
     pub drivers: Real,

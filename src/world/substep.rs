@@ -96,9 +96,9 @@ pub(crate) struct SubstepState {
 /// start from again.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SubstepMemory {
-    next: Option<Real>,
-    ceiling: Option<Real>,
-    streak: usize,
+    pub(crate) next: Option<Real>,
+    pub(crate) ceiling: Option<Real>,
+    pub(crate) streak: usize,
 }
 
 impl SubstepState {

@@ -56,6 +56,8 @@ pub struct RodSystem {
     pub loads: Vec<Load>,
     /// The rod's topology epoch when the energies last heard of its knots.
     heard_epoch: u64,
+    /// Every knot change so far, in order (checkpoints replay them).
+    pub(crate) knot_changes: Vec<crate::world::saved::KnotChange>,
 }
 
 impl RodSystem {
@@ -63,6 +65,7 @@ impl RodSystem {
     pub fn new(rod: Rod) -> Self {
         Self {
             heard_epoch: rod.topology_epoch(),
+            knot_changes: Vec::new(),
             rod,
             pins: Vec::new(),
             energies: Vec::new(),
@@ -145,8 +148,14 @@ impl RodSystem {
         &mut self,
         change: impl FnOnce(&mut Rod, &mut dyn FnMut(&Rod, &KnotMap)) -> Result<R, E>,
     ) -> Result<R, E> {
-        let Self { rod, energies, .. } = self;
+        let Self {
+            rod,
+            energies,
+            knot_changes,
+            ..
+        } = self;
         let mut listener = |rod: &Rod, map: &KnotMap| {
+            knot_changes.push(crate::world::saved::change_of(map));
             for e in energies.iter_mut() {
                 e.on_knot_change(rod, map);
             }

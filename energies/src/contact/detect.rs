@@ -39,7 +39,7 @@ use super::skin::{Skin, SKIN};
 use nalgebra::Vector3;
 use splinerod_core::proximity::{closest_points_between, BoxSweep};
 use splinerod_core::segments::just_below;
-use splinerod_core::{BasisValues, CoreError, Real, Rod};
+use splinerod_core::{BasisValues, CoreError, Real, Rod, SavedState, StateReader};
 
 /// Closest points `C(s)` and `C(t)` of two contact segments closer than the reach.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -143,6 +143,38 @@ pub(crate) struct Detector {
 }
 
 impl Detector {
+    /// Appends the Verlet list (see [`Skin::save`]) and the sample positions as they
+    /// stand (a warm list updates only its own samples; the others keep the positions of
+    /// the last full placement, which the closest-point prefilter reads).
+    pub fn save_state(&self, out: &mut SavedState) {
+        self.skin.save(out);
+        out.vectors(&self.samples.position);
+        out.int(u64::from(self.placed_all));
+    }
+
+    /// Reads back the Verlet list for `rod`, laying out its samples.
+    pub fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        *self = Self::default();
+        let epoch = rod.topology_epoch();
+        self.skin.load(input, epoch)?;
+        if let Some([segment, spacing]) = self.skin.layout() {
+            self.build_segments(rod, segment, spacing)?;
+            self.layout = Some((epoch, [segment, spacing]));
+            if !self.skin.fits(self.samples.s.len(), self.segments.len()) {
+                self.skin = Skin::default();
+                return Err(CoreError::StateMismatch("a contact list of another rod"));
+            }
+        }
+        input.vectors_into(&mut self.samples.position)?;
+        self.placed_all = input.int()? == 1;
+        let placed = self.samples.position.len();
+        if self.layout.is_some() && placed != self.samples.s.len() {
+            *self = Self::default();
+            return Err(CoreError::StateMismatch("contact samples of another rod"));
+        }
+        Ok(())
+    }
+
     /// Detects sample pairs closer than `reach` (m) on segments of length `segment` (m)
     /// at least `exclusion` (m) apart along the rod, with samples at most `spacing` (m)
     /// apart, unless the rod is unchanged since the last call with the same settings.

@@ -15,7 +15,7 @@
 
 use super::detect::{SamplePair, Segment};
 use nalgebra::Vector3;
-use splinerod_core::{Real, Rod};
+use splinerod_core::{CoreError, Real, Rod, SavedState, StateReader};
 
 /// Width of the skin, in reaches: a wider skin lists more pairs and is rebuilt less often.
 pub(crate) const SKIN: Real = 0.25;
@@ -41,6 +41,80 @@ pub(crate) struct Skin {
 }
 
 impl Skin {
+    /// Appends the list (checkpoints: which pairs a warm list re-measures decides the
+    /// rounding of the results, so a resumed run needs the same list).
+    pub fn save(&self, out: &mut SavedState) {
+        out.int(u64::from(self.key.is_some()));
+        if let Some((_, settings)) = self.key {
+            out.reals(&settings);
+        }
+        out.real(self.margin);
+        out.vectors(&self.reference);
+        let flat = |pairs: &[(u32, u32)]| {
+            pairs
+                .iter()
+                .flat_map(|&(a, b)| [u64::from(a), u64::from(b)])
+                .collect::<Vec<_>>()
+        };
+        out.ints(flat(&self.near).into_iter());
+        out.ints(flat(&self.segments).into_iter());
+        let groups = self.groups.iter().flat_map(|&(a, b)| [a as u64, b as u64]);
+        out.ints(groups.collect::<Vec<_>>().into_iter());
+        out.ints(self.samples.iter().map(|&k| u64::from(k)));
+    }
+
+    /// Reads back what [`save`](Self::save) wrote, for a rod of topology epoch `epoch`;
+    /// check it with [`fits`](Self::fits) once the samples are laid out.
+    pub fn load(&mut self, input: &mut StateReader<'_>, epoch: u64) -> Result<(), CoreError> {
+        let bad = || CoreError::StateMismatch("a contact list entry out of range");
+        self.key = None;
+        let keyed = input.int()? == 1;
+        let mut settings = Vec::new();
+        if keyed {
+            input.reals_into(&mut settings)?;
+        }
+        self.margin = input.real()?;
+        input.vectors_into(&mut self.reference)?;
+        let small = |x: u64| u32::try_from(x).map_err(|_| bad());
+        for out in [&mut self.near, &mut self.segments] {
+            out.clear();
+            for c in input.ints()?.chunks_exact(2) {
+                out.push((small(c[0])?, small(c[1])?));
+            }
+        }
+        self.groups.clear();
+        for c in input.ints()?.chunks_exact(2) {
+            let (a, b) = (c[0] as usize, c[1] as usize);
+            if a > b || b > self.near.len() {
+                return Err(bad());
+            }
+            self.groups.push((a, b));
+        }
+        self.samples.clear();
+        for &k in input.ints()? {
+            self.samples.push(small(k)?);
+        }
+        if keyed {
+            let s: [Real; 4] = settings.try_into().map_err(|_| bad())?;
+            self.key = Some((epoch, s));
+        }
+        Ok(())
+    }
+
+    /// The `[segment, spacing]` of the detection the list was made for, if any.
+    pub fn layout(&self) -> Option<[Real; 2]> {
+        self.key.map(|(_, s)| [s[2], s[3]])
+    }
+
+    /// Whether every sample and segment the list names exists (`samples` samples,
+    /// `segments` segments).
+    pub fn fits(&self, samples: usize, segments: usize) -> bool {
+        let pair_ok = |&(a, b): &(u32, u32), n: usize| (a as usize) < n && (b as usize) < n;
+        self.near.iter().all(|p| pair_ok(p, samples))
+            && self.segments.iter().all(|p| pair_ok(p, segments))
+            && self.samples.iter().all(|&k| (k as usize) < samples)
+    }
+
     /// Whether the list still holds every pair within reach at `rod`'s positions, for
     /// the detection `key`.
     pub fn holds(&self, rod: &Rod, key: (u64, [Real; 4])) -> bool {

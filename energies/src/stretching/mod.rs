@@ -39,6 +39,7 @@ use crate::Energy;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{
     BasisSpace, BasisValues, BlockBanded, CoreError, HessianKind, KnotMap, QuadPoint, Real, Rod,
+    SavedState, StateReader,
 };
 use std::sync::Arc;
 
@@ -410,6 +411,19 @@ impl Energy for Stretching {
         let mut copy = self.clone();
         copy.follow(fine);
         Some(Box::new(copy))
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        if let Some(m) = &self.multipliers {
+            m.save(out);
+        }
+    }
+
+    fn load_state(&mut self, _rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        match &mut self.multipliers {
+            Some(m) => m.load(input),
+            None => Ok(()),
+        }
     }
 
     fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {

@@ -24,7 +24,7 @@
 //! updates restore \\(b_k = 0\\) on the new space.
 
 use splinerod_core::bspline::bspline_values;
-use splinerod_core::{Real, Rod};
+use splinerod_core::{CoreError, Real, Rod, SavedState, StateReader};
 
 /// Standard gravity, m/s²: the penalty's scale.
 const G0: Real = 9.81;
@@ -78,6 +78,23 @@ impl Multipliers {
         }
         self.last = violation;
         violation
+    }
+
+    /// Appends the multipliers, penalty and last violation (checkpoints).
+    pub fn save(&self, out: &mut SavedState) {
+        out.reals(&self.values);
+        out.reals(&self.knots);
+        out.real(self.penalty);
+        out.real(self.last);
+    }
+
+    /// Reads back what [`save`](Self::save) wrote.
+    pub fn load(&mut self, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        input.reals_into(&mut self.values)?;
+        input.reals_into(&mut self.knots)?;
+        self.penalty = input.real()?;
+        self.last = input.real()?;
+        Ok(())
     }
 
     /// Re-projects the multiplier field onto `rod`'s new tension space.

@@ -47,7 +47,9 @@ use holonomy::{
     Samples, COARSE, FINE, WEIGHTS,
 };
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, Keyframes, KnotMap, Real, Rod};
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, Keyframes, KnotMap, Real, Rod, SavedState, StateReader,
+};
 use std::sync::{Mutex, MutexGuard};
 use window::Window;
 
@@ -399,6 +401,23 @@ impl Energy for Twisting {
             }),
             ..EnergySummary::default()
         })
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        out.real(self.turn);
+        out.reals(&self.branch);
+        out.int(u64::from(self.released));
+    }
+
+    fn load_state(&mut self, _rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        self.turn = input.real()?;
+        let mut branch = Vec::new();
+        input.reals_into(&mut branch)?;
+        self.branch = branch
+            .try_into()
+            .map_err(|_| CoreError::StateMismatch("a twist branch of another length"))?;
+        self.released = input.int()? == 1;
+        Ok(())
     }
 
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {

@@ -1,0 +1,237 @@
+//! A simulation's state between two steps as plain data, for checkpoints.
+//!
+//! [`Simulation::save_state`] records what the next steps depend on and the scene does
+//! not determine; [`Simulation::restore_state`] puts it into a simulation freshly built
+//! from the same scene, after which both step bit for bit alike:
+//!
+//! * the rod's coefficients, the time, the step count, the sub-stepping controller's
+//!   memory and the length of the last step;
+//! * the knot changes so far, replayed in order through [`RodSystem::change_knots`]
+//!   (every energy hears the same maps, so the rest shapes and caches that follow the
+//!   knots come out the same; the coefficients are then overwritten);
+//! * the pins' positions and the grabs' springs;
+//! * each energy's and the integrator's own state ([`splinerod_core::state`]);
+//! * the adapter's protected knots and the error estimator's schedule and last estimate.
+//!
+//! [`RodSystem::change_knots`]: crate::RodSystem::change_knots
+
+use crate::{Error, Simulation};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use splinerod_core::{CoreError, KnotOperation, Real, SavedState};
+
+/// One knot change of the run, in order: an insertion of `value`, or the removal of knot
+/// `index`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum KnotChange {
+    /// A knot inserted at this material coordinate (m).
+    Insert(Real),
+    /// Knot `index` removed.
+    Remove(usize),
+}
+
+/// An extension's [`SavedState`] as serialisable data.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Numbers {
+    /// Reals, in order.
+    pub reals: Vec<Real>,
+    /// Integers, in order.
+    pub ints: Vec<u64>,
+}
+
+impl From<SavedState> for Numbers {
+    fn from(s: SavedState) -> Self {
+        Self {
+            reals: s.reals,
+            ints: s.ints,
+        }
+    }
+}
+
+impl Numbers {
+    fn saved(&self) -> SavedState {
+        SavedState {
+            reals: self.reals.clone(),
+            ints: self.ints.clone(),
+        }
+    }
+}
+
+/// A grab's state: its spring's target and where its path starts.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GrabState {
+    /// The spring's target, m.
+    pub target: [Real; 3],
+    /// The path's start, once the grab has begun.
+    pub from: Option<[Real; 3]>,
+}
+
+/// The state of a [`Simulation`] between two steps (module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimulationState {
+    /// Simulated time, s.
+    pub time: Real,
+    /// Steps taken.
+    pub steps: usize,
+    /// The system's clock, s.
+    pub system_time: Real,
+    /// Length of the last step, s.
+    pub last_dt: Real,
+    /// The sub-stepping controller's next length, ceiling and streak.
+    pub substep: (Option<Real>, Option<Real>, usize),
+    /// Every knot change so far.
+    pub knot_changes: Vec<KnotChange>,
+    /// Control points, m.
+    pub positions: Vec<[Real; 3]>,
+    /// Their velocities, m/s.
+    pub velocities: Vec<[Real; 3]>,
+    /// Each pin's position, m.
+    pub pins: Vec<[Real; 3]>,
+    /// Each grab's state.
+    pub grabs: Vec<GrabState>,
+    /// Each energy's own state, in the system's order.
+    pub energies: Vec<Numbers>,
+    /// The integrator's own state.
+    pub integrator: Numbers,
+    /// The adapter's protected knots (coordinate, steps left), if adaptive.
+    pub protected: Option<Vec<(Real, usize)>>,
+    /// The error estimator's schedule and last estimate, if on.
+    pub estimation: Option<Numbers>,
+}
+
+fn arrays(vs: &[Vector3<Real>]) -> Vec<[Real; 3]> {
+    vs.iter().map(|v| [v.x, v.y, v.z]).collect()
+}
+
+fn vectors(xs: &[[Real; 3]]) -> Vec<Vector3<Real>> {
+    xs.iter().map(|&x| x.into()).collect()
+}
+
+fn mismatch(what: &'static str) -> Error {
+    Error::Core(CoreError::StateMismatch(what))
+}
+
+impl Simulation {
+    /// The state between steps (module docs).
+    pub fn save_state(&self) -> SimulationState {
+        let system = &self.system;
+        let energies = system.energies.iter().map(|e| {
+            let mut out = SavedState::default();
+            e.save_state(&mut out);
+            Numbers::from(out)
+        });
+        let mut integrator = SavedState::default();
+        self.integrator.save_state(&mut integrator);
+        let memory = self.substep.memory();
+        SimulationState {
+            time: self.time,
+            steps: self.steps,
+            system_time: system.time,
+            last_dt: self.last_dt,
+            substep: (memory.next, memory.ceiling, memory.streak),
+            knot_changes: system.knot_changes.clone(),
+            positions: arrays(&system.rod.positions),
+            velocities: arrays(&system.rod.velocities),
+            pins: system.pins.iter().map(|p| p.position.into()).collect(),
+            grabs: system
+                .grabs
+                .iter()
+                .map(|g| GrabState {
+                    target: g.spring.target.into(),
+                    from: g.from.map(Into::into),
+                })
+                .collect(),
+            energies: energies.collect(),
+            integrator: integrator.into(),
+            protected: self.adapter.as_ref().map(|a| a.protected().to_vec()),
+            estimation: self.estimation.as_ref().map(|e| e.save().into()),
+        }
+    }
+
+    /// Puts `state` into this simulation, freshly built from the scene `state` was saved
+    /// from (module docs). An error if it does not fit; the simulation is then unusable.
+    pub fn restore_state(&mut self, state: &SimulationState) -> Result<(), Error> {
+        self.replay(&state.knot_changes)?;
+        let system = &mut self.system;
+        let n = system.rod.len();
+        if state.positions.len() != n || state.velocities.len() != n {
+            return Err(mismatch("control points of another rod"));
+        }
+        system.rod.positions = vectors(&state.positions);
+        system.rod.velocities = vectors(&state.velocities);
+        system.rod.check_finite()?;
+        if state.pins.len() != system.pins.len() || state.grabs.len() != system.grabs.len() {
+            return Err(mismatch("pins or grabs of another scene"));
+        }
+        for (pin, &p) in system.pins.iter_mut().zip(&state.pins) {
+            pin.position = p.into();
+        }
+        for (grab, g) in system.grabs.iter_mut().zip(&state.grabs) {
+            grab.spring.target = g.target.into();
+            grab.from = g.from.map(Into::into);
+        }
+        if state.energies.len() != system.energies.len() {
+            return Err(mismatch("energies of another scene"));
+        }
+        let rod = &system.rod;
+        for (energy, numbers) in system.energies.iter_mut().zip(&state.energies) {
+            let saved = numbers.saved();
+            let mut reader = saved.reader();
+            energy.load_state(rod, &mut reader)?;
+            reader.finish()?;
+        }
+        let saved = state.integrator.saved();
+        let mut reader = saved.reader();
+        self.integrator.load_state(rod, &mut reader)?;
+        reader.finish()?;
+        self.restore_rest(state)
+    }
+
+    /// The clocks, the controller, the adapter and the estimator.
+    fn restore_rest(&mut self, state: &SimulationState) -> Result<(), Error> {
+        (self.time, self.steps, self.last_dt) = (state.time, state.steps, state.last_dt);
+        self.system.time = state.system_time;
+        let (next, ceiling, streak) = state.substep;
+        self.substep.restore(crate::world::substep::SubstepMemory {
+            next,
+            ceiling,
+            streak,
+        });
+        match (&mut self.adapter, &state.protected) {
+            (Some(a), Some(p)) => a.set_protected(p),
+            (None, None) => {}
+            _ => return Err(mismatch("adaptivity of another scene")),
+        }
+        match (&mut self.estimation, &state.estimation) {
+            (Some(e), Some(numbers)) => e.load(&numbers.saved()),
+            (None, None) => Ok(()),
+            _ => Err(mismatch("an error estimate of another scene")),
+        }
+    }
+
+    /// Applies `changes` to the freshly built rod, every energy hearing each map.
+    fn replay(&mut self, changes: &[KnotChange]) -> Result<(), Error> {
+        if !self.system.knot_changes.is_empty() {
+            return Err(mismatch("a simulation that has changed its knots already"));
+        }
+        for &change in changes {
+            self.system.change_knots(|rod, heard| {
+                let map = match change {
+                    KnotChange::Insert(s) => rod.insert_knot(s)?,
+                    KnotChange::Remove(index) => rod.remove_knot(index, Real::MAX)?,
+                };
+                heard(rod, &map);
+                Ok::<(), CoreError>(())
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// The change a knot map made, for the log.
+pub(crate) fn change_of(map: &splinerod_core::KnotMap) -> KnotChange {
+    match map.operation() {
+        KnotOperation::Insert => KnotChange::Insert(map.value()),
+        KnotOperation::Remove => KnotChange::Remove(map.knot_index()),
+    }
+}

@@ -1,0 +1,282 @@
+//! Checkpoints and resume at the command line: a run stopped at any step (by
+//! `--max-steps` or a signal) with `--checkpoint DIR` and continued by `splinerod resume
+//! DIR` writes the same JSON, stats CSV and ParaView files as the run never stopped, bit
+//! for bit but for wall-clock times — for every integrator, an adaptive scene, a scene
+//! with cuts, contact with friction, twist, an ensemble and a static solve. Foreign and
+//! damaged checkpoints are refused with one line.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("splinerod-resume-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+fn splinerod(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splinerod"))
+        .args(args)
+        .output()
+        .expect("splinerod runs")
+}
+
+fn ok(args: &[&str]) {
+    let out = splinerod(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// `scenes/NAME` with each `(from, to)` replaced, written into `d`.
+fn variant(d: &Path, name: &str, edits: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(Path::new("scenes").join(name)).expect("scene");
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name} has no `{from}`");
+        text = text.replace(from, to);
+    }
+    let path = d.join(name);
+    std::fs::write(&path, text).expect("scene written");
+    path
+}
+
+/// The JSON without its wall-clock fields and the count of symbolic analyses (a
+/// resumed process analyses the sparse pattern it meets once more: work, not results).
+fn result(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).expect("JSON written");
+    let mut v: Value = serde_json::from_str(&text).expect("JSON");
+    let map = v.as_object_mut().expect("object");
+    for key in ["wall_seconds", "median_step_seconds", "stage_seconds"] {
+        map.remove(key);
+    }
+    if let Some(solver) = map.get_mut("solver").and_then(Value::as_object_mut) {
+        solver.remove("symbolic_analyses");
+    }
+    v
+}
+
+/// The stats CSV without its wall-clock columns.
+fn stats(path: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(path).expect("stats written");
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    let keep: Vec<usize> = (0..rows[0].len())
+        .filter(|&i| !rows[0][i].ends_with("seconds"))
+        .collect();
+    rows.iter()
+        .map(|r| keep.iter().map(|&i| r[i].to_string()).collect())
+        .collect()
+}
+
+/// Runs `scene` whole, and again stopped after each of `stops` steps (each stop resumed
+/// from the last checkpoint), with JSON, stats and VTK; the outputs must be equal.
+fn resumes_exactly(test: &str, scene: &Path, stops: &[usize]) {
+    let d = dir(&format!("{test}-runs"));
+    let outputs = |tag: &str| {
+        let o = d.join(tag);
+        std::fs::create_dir_all(&o).expect("dir");
+        let args = [
+            "--json", "r.json", "--stats", "s.csv", "--vtk", "vtk", "--every", "7",
+        ];
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| match *a {
+                "r.json" | "s.csv" | "vtk" => o.join(a).display().to_string(),
+                a => a.to_string(),
+            })
+            .collect();
+        (o, args)
+    };
+    let scene = scene.to_str().unwrap();
+    let (whole, args) = outputs("whole");
+    let mut line = vec!["run", scene];
+    line.extend(args.iter().map(String::as_str));
+    ok(&line);
+    let (parts, args) = outputs("parts");
+    let ck = d.join("ck");
+    let ck = ck.to_str().unwrap();
+    let first = stops[0].to_string();
+    let mut line = vec!["run", scene, "--checkpoint", ck, "--max-steps", &first];
+    line.extend(args.iter().map(String::as_str));
+    ok(&line);
+    for stop in &stops[1..] {
+        ok(&["resume", ck, "--max-steps", &stop.to_string()]);
+    }
+    ok(&["resume", ck]);
+    assert_eq!(
+        result(&whole.join("r.json")),
+        result(&parts.join("r.json")),
+        "{test}: JSON"
+    );
+    assert_eq!(
+        stats(&whole.join("s.csv")),
+        stats(&parts.join("s.csv")),
+        "{test}: stats"
+    );
+    let files = |o: &Path| {
+        let mut names: Vec<_> = std::fs::read_dir(o.join("vtk"))
+            .expect("vtk")
+            .map(|e| e.expect("entry").file_name())
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(files(&whole), files(&parts), "{test}: VTK files");
+    for name in files(&whole) {
+        let read = |o: &Path| std::fs::read(o.join("vtk").join(&name)).expect("vtk file");
+        assert!(read(&whole) == read(&parts), "{test}: {name:?} differs");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn implicit_euler_resumes_exactly() {
+    resumes_exactly(
+        "euler",
+        Path::new("scenes/hanging_cable.toml"),
+        &[333, 1200],
+    );
+}
+
+#[test]
+fn midpoint_and_bdf2_resume_exactly() {
+    let d = dir("schemes");
+    resumes_exactly("midpoint", Path::new("scenes/string_midpoint.toml"), &[101]);
+    let bdf2 = variant(
+        &d,
+        "hanging_cable.toml",
+        &[
+            ("\"implicit-euler\"", "\"bdf2\""),
+            ("duration = 10.0", "duration = 3.0"),
+        ],
+    );
+    resumes_exactly("bdf2", &bdf2, &[1, 250]);
+}
+
+#[test]
+fn static_solve_resumes_exactly() {
+    resumes_exactly("static", Path::new("scenes/catenary_static.toml"), &[0]);
+}
+
+#[test]
+fn adaptive_cut_and_twist_scenes_resume_exactly() {
+    resumes_exactly("adaptive", Path::new("scenes/grab_adaptive.toml"), &[377]);
+    resumes_exactly("cuts", Path::new("scenes/cut_three.toml"), &[60, 100]);
+    let d = dir("twist");
+    let twist = variant(
+        &d,
+        "twist_buckling.toml",
+        &[("duration = 11.0", "duration = 2.0")],
+    );
+    resumes_exactly("twist", &twist, &[123]);
+}
+
+#[test]
+fn contact_with_friction_resumes_exactly() {
+    let d = dir("friction");
+    let pileup = variant(
+        &d,
+        "rope_pileup.toml",
+        &[("duration = 2.5", "duration = 0.6")],
+    );
+    resumes_exactly("friction", &pileup, &[50, 157, 250]);
+    let knot = variant(
+        &d,
+        "knot_tying_adaptive.toml",
+        &[("duration = 3.0", "duration = 0.6")],
+    );
+    resumes_exactly("knot", &knot, &[120, 299, 450]);
+}
+
+#[test]
+fn ensembles_resume_exactly() {
+    let d = dir("ensemble");
+    let scene = variant(
+        &d,
+        "ensemble_cables.toml",
+        &[("count = 1000", "count = 12")],
+    );
+    resumes_exactly("ensemble", &scene, &[77]);
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_run_leaves_a_checkpoint_to_resume() {
+    let d = dir("signal");
+    let scene = variant(
+        &d,
+        "hanging_cable.toml",
+        &[("duration = 10.0", "duration = 100.0")],
+    );
+    let (scene, ck) = (scene.to_str().unwrap(), d.join("ck"));
+    let (whole, parts) = (d.join("whole.json"), d.join("parts.json"));
+    ok(&["run", scene, "--json", whole.to_str().unwrap()]);
+    let child = Command::new(env!("CARGO_BIN_EXE_splinerod"))
+        .args(["run", scene, "--json", parts.to_str().unwrap()])
+        .args(["--checkpoint", ck.to_str().unwrap(), "--vtk"])
+        .arg(d.join("vtk"))
+        .args(["--every", "100"])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let start = std::time::Instant::now();
+    while !d.join("vtk").join("centreline_00002.vtp").exists() {
+        assert!(start.elapsed().as_secs() < 120, "the run never got going");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    assert!(kill.expect("kill").success());
+    let out = child.wait_with_output().expect("ends");
+    assert_eq!(out.status.code(), Some(130));
+    let stopped = result(&parts);
+    assert_eq!(stopped["interrupted"], true);
+    ok(&["resume", ck.to_str().unwrap()]);
+    assert_eq!(result(&whole), result(&parts));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn foreign_and_damaged_checkpoints_are_refused() {
+    let d = dir("foreign");
+    let ck = d.join("ck");
+    let refused = |what: &str| {
+        let out = splinerod(&["resume", ck.to_str().unwrap()]);
+        let line = String::from_utf8_lossy(&out.stderr).trim_end().to_string();
+        assert_eq!(out.status.code(), Some(2), "{what}: {line}");
+        assert!(
+            !line.contains('\n') && line.starts_with("error: "),
+            "{what}: {line}"
+        );
+        line
+    };
+    assert!(refused("missing").contains("checkpoint.bin"));
+    std::fs::create_dir_all(&ck).expect("dir");
+    std::fs::write(ck.join("checkpoint.bin"), b"PK\x03\x04 not ours").expect("write");
+    assert!(refused("foreign").contains("not a splinerod checkpoint"));
+    let scene = "scenes/hanging_cable.toml";
+    ok(&[
+        "run",
+        scene,
+        "--checkpoint",
+        ck.to_str().unwrap(),
+        "--max-steps",
+        "5",
+    ]);
+    let path = ck.join("checkpoint.bin");
+    let bytes = std::fs::read(&path).expect("checkpoint");
+    // The header: the format string (length-prefixed), then the version (varint 1).
+    let at = 1 + "splinerod-checkpoint".len();
+    assert_eq!(bytes[at], 1, "format version 1");
+    let mut old = bytes.clone();
+    old[at] = 0;
+    std::fs::write(&path, &old).expect("write");
+    assert!(refused("old").contains("format 0"));
+    std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
+    assert!(refused("truncated").contains("damaged"));
+    std::fs::remove_dir_all(&d).ok();
+}
