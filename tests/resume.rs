@@ -2,7 +2,8 @@
 //! `--max-steps` or a signal) with `--checkpoint DIR` and continued by `splinerod resume
 //! DIR` writes the same JSON, stats CSV and ParaView files as the run never stopped, bit
 //! for bit but for wall-clock times — for every integrator, an adaptive scene, a scene
-//! with cuts, contact with friction, twist, an ensemble and a static solve. Foreign and
+//! with cuts, contact with friction, twist, several rods, an ensemble (and a shard of
+//! it) and a static solve. Foreign and
 //! damaged checkpoints are refused with one line.
 
 use serde_json::Value;
@@ -74,6 +75,11 @@ fn stats(path: &Path) -> Vec<Vec<String>> {
 /// Runs `scene` whole, and again stopped after each of `stops` steps (each stop resumed
 /// from the last checkpoint), with JSON, stats and VTK; the outputs must be equal.
 fn resumes_exactly(test: &str, scene: &Path, stops: &[usize]) {
+    resumes_exactly_with(test, scene, &[], stops);
+}
+
+/// [`resumes_exactly`] with `extra` arguments to both runs.
+fn resumes_exactly_with(test: &str, scene: &Path, extra: &[&str], stops: &[usize]) {
     let d = dir(&format!("{test}-runs"));
     let outputs = |tag: &str| {
         let o = d.join(tag);
@@ -94,6 +100,7 @@ fn resumes_exactly(test: &str, scene: &Path, stops: &[usize]) {
     let (whole, args) = outputs("whole");
     let mut line = vec!["run", scene];
     line.extend(args.iter().map(String::as_str));
+    line.extend(extra);
     ok(&line);
     let (parts, args) = outputs("parts");
     let ck = d.join("ck");
@@ -101,6 +108,7 @@ fn resumes_exactly(test: &str, scene: &Path, stops: &[usize]) {
     let first = stops[0].to_string();
     let mut line = vec!["run", scene, "--checkpoint", ck, "--max-steps", &first];
     line.extend(args.iter().map(String::as_str));
+    line.extend(extra);
     ok(&line);
     for stop in &stops[1..] {
         ok(&["resume", ck, "--max-steps", &stop.to_string()]);
@@ -200,6 +208,18 @@ fn ensembles_resume_exactly() {
         &[("count = 1000", "count = 12")],
     );
     resumes_exactly("ensemble", &scene, &[77]);
+    resumes_exactly_with("shard", &scene, &["--shard", "2/3"], &[31, 150]);
+}
+
+#[test]
+fn several_rods_in_contact_resume_exactly() {
+    let d = dir("rods");
+    let scene = variant(
+        &d,
+        "ropes_crossing.toml",
+        &[("duration = 3.0", "duration = 0.8")],
+    );
+    resumes_exactly("rods", &scene, &[45, 111]);
 }
 
 #[cfg(unix)]
