@@ -4,44 +4,21 @@
 //! limits are refused naming the fields, unless `--allow-large` (and then still when the
 //! memory could not exist).
 
+mod common;
+
+use common::cli::{fresh_dir as dir, refused, scene_variant, splinerod};
 use serde_json::Value;
 use splinerod::scene::Limits;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("splinerod-long-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
+use std::process::Command;
 
 /// `scenes/NAME` with `from` replaced by `to`, written into `dir`.
 fn variant(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
-    let text = std::fs::read_to_string(Path::new("scenes").join(name)).expect("scene");
-    assert!(text.contains(from), "{name} has no `{from}`");
-    let path = dir.join(name);
-    std::fs::write(&path, text.replace(from, to)).expect("scene written");
-    path
-}
-
-fn splinerod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinerod"))
-        .args(args)
-        .output()
-        .expect("splinerod runs")
+    scene_variant(dir, name, &[(from, to)])
 }
 
 fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("JSON written")).expect("JSON")
-}
-
-/// The one error line of a run that must be refused with exit 2.
-fn refused(args: &[&str]) -> String {
-    let out = splinerod(args);
-    let stderr = String::from_utf8_lossy(&out.stderr).trim_end().to_string();
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert!(!stderr.contains('\n'), "one line: {stderr}");
-    stderr
 }
 
 /// Rows of a stats CSV after its header.

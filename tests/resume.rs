@@ -6,44 +6,12 @@
 //! it) and a static solve. Foreign and
 //! damaged checkpoints are refused with one line.
 
+mod common;
+
+use common::cli::{fresh_dir as dir, ok, refused, scene_variant as variant};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("splinerod-resume-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
-}
-
-fn splinerod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinerod"))
-        .args(args)
-        .output()
-        .expect("splinerod runs")
-}
-
-fn ok(args: &[&str]) {
-    let out = splinerod(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// `scenes/NAME` with each `(from, to)` replaced, written into `d`.
-fn variant(d: &Path, name: &str, edits: &[(&str, &str)]) -> PathBuf {
-    let mut text = std::fs::read_to_string(Path::new("scenes").join(name)).expect("scene");
-    for (from, to) in edits {
-        assert!(text.contains(from), "{name} has no `{from}`");
-        text = text.replace(from, to);
-    }
-    let path = d.join(name);
-    std::fs::write(&path, text).expect("scene written");
-    path
-}
+use std::path::Path;
+use std::process::Command;
 
 /// The JSON without its wall-clock fields and the count of symbolic analyses (a
 /// resumed process analyses the sparse pattern it meets once more: work, not results).
@@ -264,14 +232,10 @@ fn an_interrupted_run_leaves_a_checkpoint_to_resume() {
 fn foreign_and_damaged_checkpoints_are_refused() {
     let d = dir("foreign");
     let ck = d.join("ck");
+    let resume = ["resume", ck.to_str().unwrap()];
     let refused = |what: &str| {
-        let out = splinerod(&["resume", ck.to_str().unwrap()]);
-        let line = String::from_utf8_lossy(&out.stderr).trim_end().to_string();
-        assert_eq!(out.status.code(), Some(2), "{what}: {line}");
-        assert!(
-            !line.contains('\n') && line.starts_with("error: "),
-            "{what}: {line}"
-        );
+        let line = refused(&resume);
+        println!("{what}: {line}");
         line
     };
     assert!(refused("missing").contains("checkpoint.bin"));

@@ -2,9 +2,11 @@
 //! `splinerod merge`, equal one run of the whole ensemble bit for bit (all but the
 //! wall-clock fields); bad shards and merges exit 2 naming the problem.
 
+mod common;
+
+use common::cli::{ok, splinerod};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 /// A 40-member version of the bundled ensemble, written to a fresh directory.
 fn setup(test: &str) -> (PathBuf, PathBuf) {
@@ -17,22 +19,6 @@ fn setup(test: &str) -> (PathBuf, PathBuf) {
     let other = dir.join("other.toml");
     std::fs::write(&other, text.replace("seed = 7", "seed = 8")).expect("scene written");
     (dir, scene)
-}
-
-fn splinerod(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinerod"))
-        .args(args)
-        .output()
-        .expect("splinerod runs")
-}
-
-fn ok(args: &[&str]) {
-    let out = splinerod(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// The error line of a command that must exit with 2.

@@ -2,6 +2,8 @@
 //! line, and assert that a scene is rejected with an error naming the field and value.
 #![allow(dead_code)] // each test binary uses a different subset
 
+pub mod cli;
+
 use splinerod::prelude::Vector3;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};

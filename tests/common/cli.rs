@@ -1,0 +1,55 @@
+//! Running the `splinerod` binary from tests: a command's output, success, a refusal
+//! with one error line, fresh temporary directories and edited copies of bundled scenes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The binary's output for `args`.
+pub fn splinerod(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splinerod"))
+        .args(args)
+        .output()
+        .expect("splinerod runs")
+}
+
+/// Runs `args`, which must succeed.
+pub fn ok(args: &[&str]) {
+    let out = splinerod(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The one error line of `args`, which must exit with 2.
+pub fn refused(args: &[&str]) -> String {
+    let out = splinerod(args);
+    let line = String::from_utf8_lossy(&out.stderr).trim_end().to_string();
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {line}");
+    assert!(
+        !line.contains('\n') && line.starts_with("error: "),
+        "one line: {line}"
+    );
+    line
+}
+
+/// A fresh, empty temporary directory for `test`.
+pub fn fresh_dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("splinerod-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// `scenes/NAME` with each `(from, to)` replaced (each must occur), written into `dir`.
+pub fn scene_variant(dir: &Path, name: &str, edits: &[(&str, &str)]) -> PathBuf {
+    let mut text = std::fs::read_to_string(Path::new("scenes").join(name)).expect("scene");
+    for (from, to) in edits {
+        assert!(text.contains(from), "{name} has no `{from}`");
+        text = text.replace(from, to);
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("scene written");
+    path
+}
