@@ -485,3 +485,31 @@ fn cli_bad_contact_exits_with_2() {
 fn has_contact(system: &splinerod::RodSystem) -> bool {
     system.energies.iter().any(|e| e.name() == "contact")
 }
+
+/// A start in deep contact (parts closer than half their contact distance) is refused
+/// when the simulation is built, naming the radius: the penalty would push them apart
+/// only through tiny sub-steps (the fuzzer's thick rope made six steps take minutes).
+#[test]
+fn a_start_in_deep_contact_is_refused() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let knot = std::fs::read_to_string(dir.join("knot_tying.toml")).unwrap();
+    let thick = knot.replace("radius = 0.003", "radius = 0.1");
+    assert_ne!(thick, knot);
+    let scene = Scene::from_toml(&thick).unwrap_or_err("thick knot parses");
+    let message = scene.build().err().expect("refused").to_string();
+    assert_field(&message, "rod.radius");
+    assert!(message.contains("deep contact"), "{message}");
+    let ropes = std::fs::read_to_string(dir.join("ropes_crossing.toml")).unwrap();
+    let thick = ropes.replacen("radius = 0.006", "radius = 0.3", 1);
+    let scene = Scene::from_toml(&thick).unwrap_or_err("thick ropes parse");
+    let message = scene.build().err().expect("refused").to_string();
+    assert!(
+        message.contains("rods[].radius") && message.contains("deep contact"),
+        "{message}"
+    );
+    // The bundled scenes start apart.
+    Scene::from_toml(&knot)
+        .unwrap()
+        .build()
+        .unwrap_or_err("knot_tying builds");
+}

@@ -58,6 +58,10 @@ impl Method {
     }
 }
 
+/// Smallest clearance ratio (centre-line distance over the contact distance) a scene
+/// may start with ([`Scene::build`]).
+pub const MIN_START_CLEARANCE: Real = 0.5;
+
 impl Scene {
     /// The basis space on `[0, L]` described by `rod.knots`.
     pub fn basis(&self) -> Result<BSplineSpace, Error> {
@@ -315,7 +319,9 @@ impl Scene {
     /// [`Simulation::settle`] solves the equilibrium).
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = self.integrator()?;
-        let mut sim = Simulation::new(self.build_system()?, integrator);
+        let system = self.build_system()?;
+        self.check_start_clearance(&system)?;
+        let mut sim = Simulation::new(system, integrator);
         if let Some(adapter) = self.adapter()? {
             sim = sim.with_adapter(adapter);
         }
@@ -324,6 +330,29 @@ impl Scene {
         }
         sim.control = self.step_control();
         Ok(sim)
+    }
+
+    /// Refuses a start in deep contact: parts of the rods (or a rod and an obstacle)
+    /// closer than [`MIN_START_CLEARANCE`] of their contact distance. The penalty would
+    /// then push them apart with forces the steps can only follow by tiny sub-steps (a
+    /// radius mistyped tenfold made a six-step run take minutes).
+    fn check_start_clearance(&self, system: &RodSystem) -> Result<(), Error> {
+        let contact = system.summary()?.contact;
+        let Some(ratio) = contact.and_then(|c| c.min_clearance_ratio) else {
+            return Ok(());
+        };
+        if ratio >= MIN_START_CLEARANCE {
+            return Ok(());
+        }
+        let (field, radius) = match self.rods.is_empty() {
+            true => ("rod.radius".to_string(), self.rod.radius),
+            false => ("rods[].radius".to_string(), None),
+        };
+        let value = radius.map_or("as given".to_string(), |r| r.to_string());
+        let reason = format!(
+            "the rods start in deep contact (clearance {ratio:.3} of the contact distance, at least {MIN_START_CLEARANCE} needed): lay them out apart or use a smaller radius"
+        );
+        Err(Error::field(field, value, reason))
     }
 
     /// Number of steps of `dt` covering `duration` (the last step ends at or just past it).
