@@ -477,3 +477,23 @@ fn stretch_formulation_and_inextensible_are_checked() {
         .and_then(|s| s.build_system().map(|_| ()))
         .expect("an inextensible rod is a valid scene");
 }
+
+/// A thin rod's bending and twisting stiffnesses are at most EA·L² (100 N·m² here):
+/// beyond, the Newton matrix mixes stiffnesses no double resolves (the fuzzer's
+/// EI = 9.2e18 made a run that could not finish).
+#[test]
+fn bending_and_twist_stiffness_at_most_ea_l_squared() {
+    for key in ["bending_stiffness", "twist_stiffness"] {
+        let field = format!("rod.{key}");
+        for value in ["101.0", "9223372036854775807"] {
+            let text = with_line_in(BASE, "[rod]", &format!("{key} = {value}"));
+            let message = rejected(&text);
+            assert_field(&message, &field);
+            assert!(
+                message.contains("stretch_stiffness × rest_length²"),
+                "{message}"
+            );
+        }
+    }
+    accepted(&with_line_in(BASE, "[rod]", "bending_stiffness = 100.0"));
+}

@@ -316,6 +316,12 @@ impl Scene {
                 reason,
             ));
         }
+        for (field, k) in [
+            ("rod.bending_stiffness", r.bending_stiffness),
+            ("rod.twist_stiffness", r.twist_stiffness),
+        ] {
+            self.validate_against_stretch(field, k)?;
+        }
         if let Some(ei) = r.bending_stiffness {
             positive("rod.bending_stiffness", ei)?;
             if r.degree < 2 {
@@ -386,6 +392,24 @@ impl Scene {
             &self.cuts,
             self.rod.control_points,
         )
+    }
+
+    /// A bending or twisting stiffness `k` (N·m²) of a thin rod: at most EA·L² (its
+    /// ratio to EA is a radius of gyration squared, which cannot exceed the length).
+    /// Beyond it the stiffnesses differ by more than a double resolves in one Newton
+    /// matrix (the fuzzer's EI = 9.2e18 made a run that could not finish).
+    fn validate_against_stretch(&self, field: &str, k: Option<f64>) -> Result<(), Error> {
+        let r = &self.rod;
+        let bound = r.stretch_stiffness * r.rest_length * r.rest_length;
+        match k {
+            Some(k) if k.is_finite() && bound.is_finite() && k > bound => {
+                let reason = format!(
+                    "must be at most stretch_stiffness × rest_length² = {bound:e} N·m² for a thin rod"
+                );
+                Err(Error::field(field, k, reason))
+            }
+            _ => Ok(()),
+        }
     }
 
     fn validate_shape(&self) -> Result<(), Error> {
