@@ -497,3 +497,24 @@ fn bending_and_twist_stiffness_at_most_ea_l_squared() {
     }
     accepted(&with_line_in(BASE, "[rod]", "bending_stiffness = 100.0"));
 }
+
+/// A rod may not start squeezed below a tenth of its rest length (the fuzzer's 478.8 m
+/// plectoneme laid out straight over 1 m put a quarter of a million contact samples
+/// within reach of each other): the straight start–end line and the control polygon
+/// (at least as long as the curve) are measured.
+#[test]
+fn a_rod_squeezed_at_the_start_is_refused() {
+    let short = set_in(BASE, "end", "[0.09, 0.0, 0.0]");
+    let message = rejected(&short);
+    assert_field(&message, "rod.end");
+    assert!(message.contains("stretch 9.000e-2"), "{message}");
+    accepted(&set_in(BASE, "end", "[0.1, 0.0, 0.0]"));
+    let polygon = without_in(&without_in(BASE, "start"), "end");
+    let points = (0..6).map(|i| format!("[{}, 0.0, 0.0]", 0.01 * i as f64));
+    let line = format!(
+        "initial_control_points = [{}]",
+        points.collect::<Vec<_>>().join(", ")
+    );
+    let message = rejected(&with_line_in(&polygon, "[rod]", &line));
+    assert_field(&message, "rod.initial_control_points");
+}

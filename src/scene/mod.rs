@@ -13,6 +13,7 @@ pub mod limits;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
 pub(crate) mod pins;
+mod plausible;
 pub(crate) mod rods;
 pub(crate) mod shape;
 pub(crate) mod solver;
@@ -25,6 +26,7 @@ pub use crate::scene::limits::{Limits, Resources};
 pub use crate::scene::loads::LoadSpec;
 pub use crate::scene::obstacles::ObstacleSpec;
 pub use crate::scene::pins::{PinSpec, WorldSpec};
+pub use crate::scene::plausible::MIN_START_STRETCH;
 pub use crate::scene::shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
@@ -394,24 +396,6 @@ impl Scene {
         )
     }
 
-    /// A bending or twisting stiffness `k` (N·m²) of a thin rod: at most EA·L² (its
-    /// ratio to EA is a radius of gyration squared, which cannot exceed the length).
-    /// Beyond it the stiffnesses differ by more than a double resolves in one Newton
-    /// matrix (the fuzzer's EI = 9.2e18 made a run that could not finish).
-    fn validate_against_stretch(&self, field: &str, k: Option<f64>) -> Result<(), Error> {
-        let r = &self.rod;
-        let bound = r.stretch_stiffness * r.rest_length * r.rest_length;
-        match k {
-            Some(k) if k.is_finite() && bound.is_finite() && k > bound => {
-                let reason = format!(
-                    "must be at most stretch_stiffness × rest_length² = {bound:e} N·m² for a thin rod"
-                );
-                Err(Error::field(field, k, reason))
-            }
-            _ => Ok(()),
-        }
-    }
-
     fn validate_shape(&self) -> Result<(), Error> {
         let r = &self.rod;
         match &r.knots {
@@ -461,7 +445,7 @@ impl Scene {
         if let Some(e) = r.end {
             finite_vec("rod.end", e)?;
         }
-        Ok(())
+        self.validate_start_length()
     }
 }
 
