@@ -307,6 +307,10 @@ fn mutated_scenes_end_cleanly() {
         let (name, text) = &scenes[k];
         let mutated = mutate(text, pick, &mutation);
         let outcome = run_cli(&dir, &mutated);
+        let done = exit0.get() + exit2.get() + 1;
+        if done % 1000 == 0 {
+            eprintln!("{done} cases, {:.0} s", start.elapsed().as_secs_f64());
+        }
         match outcome.code {
             Some(0) => exit0.set(exit0.get() + 1),
             Some(2) => exit2.set(exit2.get() + 1),
