@@ -8,6 +8,12 @@
 //! its own [`Tally`] — solver counters, energy summaries (contacts), error estimates,
 //! knot tracking, due cuts, the control-point history, probes — and observers see
 //! member 0. Cuts due at the start (all of them for a static scene) are made first.
+//!
+//! A [`RunControl`] may stop the loop before a stage (a signal's flag, `max_steps`);
+//! the result is then complete up to there and marked interrupted. With a checkpoint
+//! plan the loop writes the run's state (members, tallies, observers) periodically and
+//! where it stops, and [`resume_scene`] continues such a run from the stage after it
+//! ([`crate::run::checkpoint`]).
 
 use crate::run::checkpoint::{Checkpoint, CheckpointPlan, MemberState};
 use crate::run::ensemble::summarize;
