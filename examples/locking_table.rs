@@ -8,6 +8,10 @@ fn main() {
     for (name, formulation) in [
         ("pointwise (paper eq. 12)", StretchFormulation::Pointwise),
         ("mixed (default)", StretchFormulation::Mixed),
+        (
+            "mixed, consistent Gram",
+            StretchFormulation::MixedConsistent,
+        ),
     ] {
         println!("{name}\nEA (N)    16 points    32 points    64 points");
         for row in study(formulation) {

@@ -1,8 +1,9 @@
 //! The step `splinerod bench` times as `step_us_16` (16-point cable, one Newton
 //! iteration, no line search), repeated, for profilers:
-//! `valgrind --tool=callgrind target/release/examples/step_profile [STEPS]`.
+//! `valgrind --tool=callgrind target/release/examples/step_profile [STEPS]
+//! [consistent]` (`consistent`: the mixed stretching with the consistent Gram matrix).
 use splinerod::prelude::*;
-use splinerod::problems::pinned_cable;
+use splinerod::problems::pinned_cable_with;
 use std::time::Instant;
 
 fn main() -> Result<(), Error> {
@@ -15,7 +16,11 @@ fn main() -> Result<(), Error> {
         line_search: false,
         ..NewtonParams::default()
     };
-    let system = pinned_cable(16, 1.05, 100.0)?;
+    let formulation = match std::env::args().nth(2).as_deref() {
+        Some("consistent") => StretchFormulation::MixedConsistent,
+        _ => StretchFormulation::default(),
+    };
+    let system = pinned_cable_with(16, 1.05, 100.0, formulation)?;
     let mut sim = Simulation::new(system, Box::new(ImplicitEuler::new(params)?));
     let t = Instant::now();
     for _ in 0..steps {

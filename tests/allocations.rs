@@ -2,7 +2,7 @@
 //! allocator (per thread) watches 100 steps of each integrator after a warm-up.
 
 use splinerod::prelude::*;
-use splinerod::problems::pinned_cable;
+use splinerod::problems::pinned_cable_with;
 use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
 use std::cell::Cell;
 
@@ -38,6 +38,16 @@ fn allocations_during(f: impl FnOnce()) -> usize {
 
 type MakeIntegrator = fn() -> Box<dyn Integrator>;
 
+/// Every combination of three lists' entries, in order.
+fn iproduct<'a, A, B, C>(
+    a: &'a [A],
+    b: &'a [B],
+    c: &'a [C],
+) -> impl Iterator<Item = (&'a A, &'a B, &'a C)> {
+    a.iter()
+        .flat_map(move |x| b.iter().flat_map(move |y| c.iter().map(move |z| (x, y, z))))
+}
+
 #[test]
 fn steps_do_not_allocate_after_warm_up() {
     let integrators: [(&str, MakeIntegrator); 3] = [
@@ -51,10 +61,14 @@ fn steps_do_not_allocate_after_warm_up() {
             Box::new(Bdf2::new(NewtonParams::default()).expect("p"))
         }),
     ];
-    for n in [16, 1000] {
-        for (name, make) in integrators {
+    let forms = [
+        StretchFormulation::Mixed,
+        StretchFormulation::MixedConsistent,
+    ];
+    for (n, (name, make), form) in iproduct(&[16, 1000], &integrators, &forms) {
+        {
             // Slightly stretched, so every step converges the same way.
-            let system = pinned_cable(n, 1.05, 100.0).expect("cable");
+            let system = pinned_cable_with(*n, 1.05, 100.0, *form).expect("cable");
             let mut sim = Simulation::new(system, make());
             for _ in 0..10 {
                 sim.step(1e-3).expect("warm-up step");
@@ -66,7 +80,7 @@ fn steps_do_not_allocate_after_warm_up() {
             });
             assert_eq!(
                 count, 0,
-                "{name}, {n} control points: {count} allocations in 100 steps"
+                "{name}, {form:?}, {n} control points: {count} allocations in 100 steps"
             );
         }
     }
@@ -77,8 +91,12 @@ fn steps_do_not_allocate_after_warm_up() {
 #[test]
 fn error_estimates_do_not_allocate_after_warm_up() {
     use splinerod::adaptivity::{AdaptParams, Adapter, ToleranceCriterion};
-    for n in [16, 200] {
-        let system = pinned_cable(n, 1.05, 100.0).expect("cable");
+    let forms = [
+        StretchFormulation::Mixed,
+        StretchFormulation::MixedConsistent,
+    ];
+    for (n, form) in [16, 200].into_iter().flat_map(|n| forms.map(|f| (n, f))) {
+        let system = pinned_cable_with(n, 1.05, 100.0, form).expect("cable");
         let euler = Box::new(ImplicitEuler::new(NewtonParams::default()).expect("p"));
         let params = AdaptParams {
             max_control_points: n,
@@ -99,6 +117,9 @@ fn error_estimates_do_not_allocate_after_warm_up() {
             }
         });
         assert!(estimates >= 5, "{estimates} estimates");
-        assert_eq!(count, 0, "{n} control points: {count} allocations");
+        assert_eq!(
+            count, 0,
+            "{form:?}, {n} control points: {count} allocations"
+        );
     }
 }

@@ -58,11 +58,13 @@ pub trait FineProblem {
     fn bandwidth(&self, fine: &Rod) -> usize {
         fine.basis().degree()
     }
-    /// Solves `stiffness · x = rhs` in place (`stiffness` may be overwritten), with the
+    /// Solves `stiffness · x = rhs` in place on `fine` (`stiffness` may be overwritten;
+    /// a Hessian with a remainder that is not banded adds it here), with the
     /// coefficients pins hold kept at zero; false if the matrix is singular (then the
     /// estimate falls back on the local corrections).
     fn solve(
         &mut self,
+        fine: &Rod,
         stiffness: &mut BlockBanded,
         rhs: &mut [Vector3<Real>],
     ) -> Result<bool, AdaptError>;
@@ -176,7 +178,7 @@ impl Estimator {
         // The global correction: one Newton step of the finer problem.
         self.correction.clear();
         self.correction.extend(self.residual.iter().map(|r| -r));
-        let global = if problem.solve(&mut self.stiffness, &mut self.correction)? {
+        let global = if problem.solve(&fine, &mut self.stiffness, &mut self.correction)? {
             self.largest_displacement(&fine)
         } else {
             self.correction

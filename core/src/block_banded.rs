@@ -441,3 +441,25 @@ impl BlockBanded {
         a
     }
 }
+
+/// Adds the linear operator `apply` (`apply(v, out)` adds `A v` to `out`, for vectors of
+/// `n` 3-vectors) to the dense `a` (3n × 3n), one column per unit vector: for tests and
+/// small dense analyses of an operator that is not stored (a Hessian's remainder).
+pub fn add_operator_columns(
+    n: usize,
+    a: &mut nalgebra::DMatrix<Real>,
+    mut apply: impl FnMut(&[Vector3<Real>], &mut [Vector3<Real>]),
+) {
+    let (mut v, mut out) = (vec![Vector3::zeros(); n], vec![Vector3::zeros(); n]);
+    for c in 0..3 * n {
+        v[c / 3][c % 3] = 1.0;
+        out.iter_mut().for_each(|o| *o = Vector3::zeros());
+        apply(&v, &mut out);
+        v[c / 3][c % 3] = 0.0;
+        for (r, o) in out.iter().enumerate() {
+            for b in 0..3 {
+                a[(3 * r + b, c)] += o[b];
+            }
+        }
+    }
+}

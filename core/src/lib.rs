@@ -55,7 +55,7 @@ pub type Real = f64;
 
 pub use banded::SymBanded;
 pub use basis::{BasisSpace, BasisValues, Span, MAX_DEGREE};
-pub use block_banded::{BlockBanded, FarBlock, LowRank};
+pub use block_banded::{add_operator_columns, BlockBanded, FarBlock, LowRank};
 pub use bspline::BSplineSpace;
 pub use check::Requirement;
 pub use error::CoreError;

@@ -11,7 +11,8 @@
 use crate::Energy;
 use nalgebra::{Rotation3, Vector3};
 use splinerod_core::{
-    BSplineSpace, BasisSpace, BlockBanded, CoreError, HessianKind, Material, Real, Rod,
+    add_operator_columns, BSplineSpace, BasisSpace, BlockBanded, CoreError, HessianKind, Material,
+    Real, Rod,
 };
 
 /// Which invariance under rigid motions the energy has.
@@ -256,10 +257,19 @@ fn gradient_error(energy: &dyn Energy, rod: &Rod) -> Real {
     worst / max_norm(&g).max(Real::MIN_POSITIVE)
 }
 
+/// The dense Hessian: the banded part and, column by column, the remainder
+/// ([`Energy::add_hessian_remainder`]).
 fn hessian_of(energy: &dyn Energy, rod: &Rod, kind: HessianKind) -> nalgebra::DMatrix<Real> {
-    let mut h = BlockBanded::zeros(rod.len(), energy.bandwidth(rod));
+    let n = rod.len();
+    let mut h = BlockBanded::zeros(n, energy.bandwidth(rod));
     energy.add_hessian(rod, kind, &mut h);
-    h.to_dense()
+    let mut dense = h.to_dense();
+    if energy.has_hessian_remainder(rod) {
+        add_operator_columns(n, &mut dense, |v, out| {
+            energy.add_hessian_remainder(rod, v, 1.0, out)
+        });
+    }
+    dense
 }
 
 fn hessian_error(energy: &dyn Energy, rod: &Rod) -> Real {

@@ -113,6 +113,32 @@ pub trait Energy: Send + Sync {
         self.add_hessian(rod, kind, hessian);
     }
 
+    /// Whether the Hessian has a remainder that [`add_hessian`](Energy::add_hessian)
+    /// leaves out (see [`add_hessian_remainder`](Energy::add_hessian_remainder)). The
+    /// default: none.
+    fn has_hessian_remainder(&self, rod: &Rod) -> bool {
+        let _ = rod;
+        false
+    }
+
+    /// Adds `scale · R v` to `out`, where the Hessian is `H + R` with `H` what
+    /// [`add_hessian`](Energy::add_hessian) adds (exact kind) and `R` a part that is not
+    /// banded — a mixed form's consistent Gram matrix couples every control point with
+    /// every other. `R` must be symmetric positive semi-definite and the same for either
+    /// [`HessianKind`]: Newton's method factorises the banded `H` and corrects its step
+    /// by conjugate gradients preconditioned with it, which converge fast when `H` is
+    /// close to `H + R` (for the mixed stretching, within a factor the degree bounds).
+    /// O(n) and allocation-free. The default: no remainder.
+    fn add_hessian_remainder(
+        &self,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        let _ = (rod, v, scale, out);
+    }
+
     /// Adds the axial tension (force along the centreline, N) this energy carries at the
     /// material coordinates `s` into `out` (same length) and returns true; energies
     /// without a tension (the default) return false.

@@ -180,6 +180,27 @@ impl Energy for OnSegment {
         });
     }
 
+    fn has_hessian_remainder(&self, rod: &Rod) -> bool {
+        self.with(rod, false, |local| {
+            self.inner.has_hessian_remainder(&local.rod)
+        })
+    }
+
+    fn add_hessian_remainder(
+        &self,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        let first = rod.segment_points(self.segment).start;
+        self.with(rod, (), |local| {
+            let n = local.rod.len();
+            let (v, out) = (&v[first..first + n], &mut out[first..first + n]);
+            self.inner.add_hessian_remainder(&local.rod, v, scale, out);
+        });
+    }
+
     fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
         let start = self.start(rod);
         let end = start

@@ -25,6 +25,12 @@ const BENDING_KNOT_INSERTION: Real = 3e-2;
 /// rods (a few control points, strain varying by tens of percent per span).
 const MIXED_KNOT_INSERTION: Real = 0.3;
 
+fn consistent(ea: Real) -> Stretching {
+    let mut s = Stretching::new(ea).unwrap();
+    s.formulation = StretchFormulation::MixedConsistent;
+    s
+}
+
 fn pointwise(ea: Real) -> Stretching {
     let mut s = Stretching::new(ea).unwrap();
     s.formulation = StretchFormulation::Pointwise;
@@ -45,6 +51,15 @@ fn energies() -> Vec<(Box<dyn Energy>, Expectations)> {
         ),
         (
             Box::new(Stretching::new(100.0).unwrap()),
+            Expectations {
+                zero_at_rest: true,
+                rigid: RigidInvariance::Full,
+                knot_insertion: MIXED_KNOT_INSERTION,
+            },
+        ),
+        (
+            // Gradient and Hessian (banded part plus remainder) against differences.
+            Box::new(consistent(100.0)),
             Expectations {
                 zero_at_rest: true,
                 rigid: RigidInvariance::Full,

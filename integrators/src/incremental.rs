@@ -194,6 +194,10 @@ impl NewtonProblem for IncrementalProblem<'_> {
         self.step.reach
     }
 
+    fn hessian_scale(&self) -> Real {
+        self.step.beta * self.step.beta
+    }
+
     fn on_not_positive_definite(&mut self) -> bool {
         let retry = self.hessian == HessianKind::Exact;
         self.hessian = HessianKind::Definite;

@@ -198,10 +198,40 @@ impl Constraints {
     /// Given `flat = A⁻¹ b` (with the eliminated pins' steps in place) and the current
     /// iterate `x`, turns `flat` into `Δx` and writes every pin's multiplier `μ`.
     pub fn correct(&mut self, x: &[Vector3<Real>], flat: &mut [Real], mu: &mut [Vector3<Real>]) {
+        self.correct_for(x, flat, mu, true);
+    }
+
+    /// Solves the KKT system with homogeneous constraints, `G Δx = 0`: `flat` holds the
+    /// right-hand side on entry and the step on return; the multipliers go to `mu`.
+    pub fn solve_homogeneous(
+        &mut self,
+        solver: &mut LinearSolver,
+        x: &[Vector3<Real>],
+        flat: &mut [Real],
+        mu: &mut [Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
+        self.points.eliminate_rhs(x, None, flat);
+        solver.solve_in_place(flat)?;
+        self.correct_for(x, flat, mu, false);
+        Ok(())
+    }
+
+    /// [`Self::correct`], for the pins' targets or (`targets` false) zero gaps.
+    fn correct_for(
+        &mut self,
+        x: &[Vector3<Real>],
+        flat: &mut [Real],
+        mu: &mut [Vector3<Real>],
+        targets: bool,
+    ) {
         let (m, dofs) = (3 * self.general.len(), 3 * self.n);
         self.sol.clear();
         for &p in &self.general {
-            let gap = self.projectors[p] * (self.targets[p] - self.apply_row(p, x));
+            let gap = if targets {
+                self.projectors[p] * (self.targets[p] - self.apply_row(p, x))
+            } else {
+                Vector3::zeros()
+            };
             self.sol.extend(gap.iter().copied());
         }
         for i in 0..m {

@@ -41,6 +41,7 @@ mod midpoint;
 pub mod modal;
 pub mod newton;
 mod point_pins;
+pub mod remainder;
 mod statics;
 
 pub use banded_cholesky::BandedCholesky;
@@ -84,6 +85,17 @@ pub trait System: Send + Sync {
         self.add_potential_gradient(gradient);
         self.add_potential_hessian(kind, hessian);
     }
+    /// Whether the potential's Hessian has a part that is not banded, left out of
+    /// [`add_potential_hessian`](System::add_potential_hessian) and applied by
+    /// [`add_hessian_remainder`](System::add_hessian_remainder). Default: none.
+    fn has_hessian_remainder(&self) -> bool {
+        false
+    }
+    /// Adds `scale · R v` for that remainder `R` (symmetric positive semi-definite, the
+    /// same for both [`HessianKind`]s). Default: nothing.
+    fn add_hessian_remainder(&self, v: &[Vector3<Real>], scale: Real, out: &mut [Vector3<Real>]) {
+        let _ = (v, scale, out);
+    }
     /// Block bandwidth of the potential's Hessian (the largest over the energies; the
     /// degree by default). Newton matrices are sized with it.
     fn hessian_bandwidth(&self) -> usize {
@@ -121,6 +133,9 @@ pub struct StepStats {
     pub continuation_steps: usize,
     /// Multiplier updates of an equilibrium solve with constraints.
     pub multiplier_updates: usize,
+    /// Conjugate-gradient iterations correcting Newton steps for a Hessian remainder
+    /// ([`System::add_hessian_remainder`]).
+    pub remainder_iterations: usize,
 }
 
 impl StepStats {
@@ -133,6 +148,7 @@ impl StepStats {
         self.line_search_cuts += other.line_search_cuts;
         self.continuation_steps += other.continuation_steps;
         self.multiplier_updates += other.multiplier_updates;
+        self.remainder_iterations += other.remainder_iterations;
         self.residual = other.residual;
     }
 }

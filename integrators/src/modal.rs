@@ -9,7 +9,7 @@
 
 use crate::{IntegratorError, System};
 use nalgebra::{DMatrix, Vector3};
-use splinerod_core::{BlockBanded, HessianKind, Real};
+use splinerod_core::{add_operator_columns, BlockBanded, HessianKind, Real};
 
 /// Largest number of degrees of freedom (3 per control point) the dense analysis accepts.
 pub const MAX_DOFS: usize = 1500;
@@ -38,7 +38,8 @@ pub fn modes(system: &dyn System, count: usize) -> Result<Vec<Mode>, IntegratorE
     }
     let mut k = BlockBanded::zeros(n, system.hessian_bandwidth());
     system.add_potential_hessian(HessianKind::Exact, &mut k);
-    let k = k.to_dense();
+    let mut k = k.to_dense();
+    add_remainder_columns(system, &mut k);
     let mut m = BlockBanded::zeros(n, rod.basis().degree());
     m.add_scaled_scalar(1.0, rod.mass_matrix());
     let m = m.to_dense();
@@ -112,4 +113,12 @@ fn free_directions(system: &dyn System) -> Result<DMatrix<Real>, IntegratorError
     Ok(DMatrix::from_fn(dofs, free.len(), |i, j| {
         eig.eigenvectors[(i, free[j])]
     }))
+}
+
+/// Adds the Hessian's remainder ([`System::add_hessian_remainder`]) to the dense `k`.
+fn add_remainder_columns(system: &dyn System, k: &mut DMatrix<Real>) {
+    if system.has_hessian_remainder() {
+        let n = system.rod().len();
+        add_operator_columns(n, k, |v, out| system.add_hessian_remainder(v, 1.0, out));
+    }
 }

@@ -28,6 +28,7 @@
 
 use crate::kkt::Constraints;
 use crate::linear::{LinearSolver, LinearSolverKind};
+use crate::remainder::{RemainderCg, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -147,6 +148,14 @@ pub trait NewtonProblem {
     fn converged(&self, step: Real, tolerance: Real) -> bool {
         step <= tolerance
     }
+    /// The factor of the potential's Hessian in the Newton matrix (`β²` for an
+    /// incremental potential, 1 for statics), which the Hessian's remainder
+    /// ([`System::add_hessian_remainder`]) is applied with; 0 (the default) leaves the
+    /// remainder out of the step (Newton then converges linearly).
+    fn hessian_scale(&self) -> Real {
+        0.0
+    }
+
     /// Called after each step with the accepted step length `t ∈ (0, 1]`.
     fn on_step(&mut self, step_length: Real) {
         let _ = step_length;
@@ -164,6 +173,12 @@ pub struct NewtonWorkspace {
     solver: LinearSolver,
     constraints: Constraints,
     multipliers: Vec<Vector3<Real>>,
+    /// The correction of steps for a Hessian remainder.
+    remainder: RemainderCg,
+    /// Scratch multipliers of the correction's solves.
+    scratch_mu: Vec<Vector3<Real>>,
+    /// Step entries below this end the correction (unknowns' units).
+    floor: Real,
 }
 
 impl NewtonWorkspace {
@@ -184,6 +199,7 @@ impl NewtonWorkspace {
         }
         self.flat.resize(3 * n, 0.0);
         self.multipliers.resize(pins, Vector3::zeros());
+        self.scratch_mu.resize(pins, Vector3::zeros());
     }
 }
 
@@ -205,6 +221,7 @@ pub fn solve(
     }
     let tolerance = params.tolerance * system.rod().material().rest_length;
     let length = problem.length_per_unknown();
+    ws.floor = REMAINDER_FLOOR * tolerance / length;
     let mut stats = StepStats::default();
     let mut previous = [Real::INFINITY; 2];
     // The merit at the applied iterate, once the line search has measured it.
@@ -281,9 +298,19 @@ fn newton_direction(
     let targets = &ws.constraints.targets;
     ws.constraints
         .points
-        .eliminate_rhs(x, targets, &mut ws.flat);
+        .eliminate_rhs(x, Some(targets), &mut ws.flat);
     ws.solver.solve_in_place(&mut ws.flat)?;
     ws.constraints.correct(x, &mut ws.flat, &mut ws.multipliers);
+    let scale = problem.hessian_scale();
+    if scale > 0.0 && system.has_hessian_remainder() {
+        let (solver, constraints, mu) = (&mut ws.solver, &mut ws.constraints, &mut ws.scratch_mu);
+        stats.remainder_iterations += ws.remainder.correct(
+            &mut ws.flat,
+            ws.floor,
+            &mut |v, sign, out| system.add_hessian_remainder(v, sign * scale, out),
+            &mut |z| constraints.solve_homogeneous(solver, x, z, mu),
+        )?;
+    }
     for (i, d) in ws.dx.iter_mut().enumerate() {
         *d = Vector3::new(ws.flat[3 * i], ws.flat[3 * i + 1], ws.flat[3 * i + 2]);
     }

@@ -166,11 +166,12 @@ impl PointPins {
         }
     }
 
-    /// Rewrites the flat right-hand side `b` for prescribed steps `δ_k = c_p − x_k`.
+    /// Rewrites the flat right-hand side `b` for prescribed steps `δ_k = c_p − x_k`
+    /// (`targets` `None`: homogeneous constraints, `δ_k = 0`).
     pub fn eliminate_rhs(
         &mut self,
         x: &[Vector3<Real>],
-        targets: &[Vector3<Real>],
+        targets: Option<&[Vector3<Real>]>,
         b: &mut [Real],
     ) {
         let (bw, n) = (self.bandwidth, x.len());
@@ -181,7 +182,7 @@ impl PointPins {
         }
         let held = |e: usize| {
             let (p, k) = self.pins[e];
-            self.projectors[e] * (targets[p] - x[k])
+            targets.map_or(Vector3::zeros(), |t| self.projectors[e] * (t[p] - x[k]))
         };
         for (e, &(_, k)) in self.pins.iter().enumerate() {
             let delta = held(e);

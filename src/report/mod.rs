@@ -122,6 +122,7 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
     for (name, formulation) in [
         ("pointwise", StretchFormulation::Pointwise),
         ("mixed", StretchFormulation::Mixed),
+        ("mixed-consistent", StretchFormulation::MixedConsistent),
     ] {
         report.locking.push((name, locking::study(formulation)));
     }

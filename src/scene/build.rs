@@ -1,7 +1,7 @@
 //! Turning a validated [`Scene`] into library objects: the basis, the rod, its energies
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
-use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene, StretchFormulationSpec};
+use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
 use crate::world::path::Path;
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
@@ -118,7 +118,7 @@ impl Scene {
         rod.damping = r.damping;
         // The mixed stretching needs fewer points than the default (cubic: 4, not 5);
         // bending's rational integrand and the floor's contact samples keep the default.
-        if r.stretch_formulation == StretchFormulationSpec::Mixed
+        if r.stretch_formulation.is_mixed()
             && r.bending_stiffness.is_none()
             && self.contact.is_none()
             && (!self.part_of_world || self.reduced_quadrature)

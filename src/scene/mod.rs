@@ -133,7 +133,8 @@ pub struct RodSpec {
     #[serde(default)]
     pub rest_shape: RestShape,
     /// How the strain enters the stretching energy: `"mixed"` (default, free of membrane
-    /// locking) or `"pointwise"` (the paper's eq. 12).
+    /// locking), `"mixed-consistent"` (mixed with the consistent Gram matrix: also
+    /// accurate where the strain varies) or `"pointwise"` (the paper's eq. 12).
     #[serde(default)]
     pub stretch_formulation: StretchFormulationSpec,
 }

@@ -14,7 +14,7 @@
 //! of different radii keep their centre lines `r₁ + r₂` apart
 //! ([`splinerod_energies::Contact::with_segment_radii`]).
 
-use crate::scene::{RodSpec, Scene, StretchFormulationSpec};
+use crate::scene::{RodSpec, Scene};
 use crate::{Error, PinDriver, RodSystem};
 use splinerod_core::{Pin, Real, Rod};
 use splinerod_energies::OnSegment;
@@ -231,10 +231,10 @@ impl Scene {
         // One quadrature for all: the mixed stretching's smaller one only if every rod
         // can use it (see `Scene::build_rod`).
         let reduced = self.contact.is_none()
-            && self.rods.iter().all(|r| {
-                r.stretch_formulation == StretchFormulationSpec::Mixed
-                    && r.bending_stiffness.is_none()
-            });
+            && self
+                .rods
+                .iter()
+                .all(|r| r.stretch_formulation.is_mixed() && r.bending_stiffness.is_none());
         for k in 0..self.rods.len() {
             let (mut sub, origins) = self.rod_scene(k)?;
             sub.part_of_world = true;

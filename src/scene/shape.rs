@@ -27,6 +27,16 @@ pub enum StretchFormulationSpec {
     /// The strain at every quadrature point (order `d + 1` on stretchy rods; locks on
     /// stiff ones).
     Pointwise,
+    /// Mixed, with the tension from the consistent Gram matrix (locking-free and order
+    /// `d + 1` on stretchy rods; Newton steps corrected by conjugate gradients).
+    MixedConsistent,
+}
+
+impl StretchFormulationSpec {
+    /// Whether the strain is projected onto the tension space (both mixed forms).
+    pub fn is_mixed(self) -> bool {
+        self != Self::Pointwise
+    }
 }
 
 impl From<StretchFormulationSpec> for splinerod_energies::StretchFormulation {
@@ -34,6 +44,7 @@ impl From<StretchFormulationSpec> for splinerod_energies::StretchFormulation {
         match spec {
             StretchFormulationSpec::Mixed => Self::Mixed,
             StretchFormulationSpec::Pointwise => Self::Pointwise,
+            StretchFormulationSpec::MixedConsistent => Self::MixedConsistent,
         }
     }
 }

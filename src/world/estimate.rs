@@ -25,6 +25,7 @@ use splinerod_core::{
 };
 use splinerod_energies::Energy;
 use splinerod_integrators::linear::LinearSolver;
+use splinerod_integrators::remainder::RemainderCg;
 
 /// The fewest steps a residual is taken to have acted for (the inertial bound's time is
 /// at least this many steps).
@@ -76,6 +77,8 @@ struct Scratch {
     flat: Vec<Real>,
     solver: LinearSolver,
     solves: u64,
+    /// The correction for a Hessian remainder.
+    cg: RemainderCg,
 }
 
 impl ErrorEstimation {
@@ -244,14 +247,74 @@ struct Mechanics<'a> {
 
 impl Mechanics<'_> {
     /// Every acting energy, as evaluated on `fine`.
-    fn for_each_energy(&self, fine: &Rod, mut f: impl FnMut(&dyn Energy)) {
-        for e in &self.system.energies {
-            match e.for_finer_rod(fine) {
-                Some(copy) => f(copy.as_ref()),
-                None => f(e.as_ref()),
+    fn for_each_energy(&self, fine: &Rod, f: impl FnMut(&dyn Energy)) {
+        for_each_energy_of(self.system, fine, f);
+    }
+}
+
+/// Every acting energy of `system`, as evaluated on `fine`.
+fn for_each_energy_of(system: &RodSystem, fine: &Rod, mut f: impl FnMut(&dyn Energy)) {
+    for e in &system.energies {
+        match e.for_finer_rod(fine) {
+            Some(copy) => f(copy.as_ref()),
+            None => f(e.as_ref()),
+        }
+    }
+    system.active_grabs().for_each(&mut f);
+}
+
+impl Mechanics<'_> {
+    /// [`FineProblem::solve`] with the coefficients `held` kept at zero: the banded
+    /// stiffness factorised, and the step corrected for the energies' Hessian remainder
+    /// by conjugate gradients preconditioned with it (as Newton does,
+    /// [`splinerod_integrators::remainder`]).
+    fn solve_held(
+        &mut self,
+        fine: &Rod,
+        stiffness: &mut BlockBanded,
+        rhs: &mut [Vector3<Real>],
+        held: &[usize],
+    ) -> Result<bool, AdaptError> {
+        hold(stiffness, held);
+        let mut remainder = false;
+        self.for_each_energy(fine, |e| remainder |= e.has_hessian_remainder(fine));
+        let s = &mut *self.scratch;
+        s.flat.clear();
+        s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
+        s.solves += 1;
+        if s.solver.factor(stiffness, s.solves).is_err()
+            || s.solver.solve_in_place(&mut s.flat).is_err()
+        {
+            return Ok(false);
+        }
+        if remainder {
+            let (solver, energies) = (&mut s.solver, &self.system);
+            let zero_held =
+                |z: &mut [Real]| held.iter().for_each(|&k| z[3 * k..3 * k + 3].fill(0.0));
+            let corrected = s.cg.correct(
+                &mut s.flat,
+                0.0,
+                &mut |v, sign, out| {
+                    for_each_energy_of(energies, fine, |e| {
+                        e.add_hessian_remainder(fine, v, sign, out)
+                    });
+                    held.iter().for_each(|&k| out[k] = Vector3::zeros());
+                },
+                &mut |z| {
+                    zero_held(z);
+                    solver.solve_in_place(z)?;
+                    zero_held(z);
+                    Ok(())
+                },
+            );
+            if corrected.is_err() {
+                return Ok(false);
             }
         }
-        self.system.active_grabs().for_each(&mut f);
+        for (v, x) in rhs.iter_mut().zip(s.flat.chunks_exact(3)) {
+            *v = Vector3::new(x[0], x[1], x[2]);
+        }
+        Ok(s.flat.iter().all(|x| x.is_finite()))
     }
 }
 
@@ -302,23 +365,14 @@ impl FineProblem for Mechanics<'_> {
 
     fn solve(
         &mut self,
+        fine: &Rod,
         stiffness: &mut BlockBanded,
         rhs: &mut [Vector3<Real>],
     ) -> Result<bool, AdaptError> {
-        let s = &mut *self.scratch;
-        hold(stiffness, &s.held);
-        s.flat.clear();
-        s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
-        s.solves += 1;
-        if s.solver.factor(stiffness, s.solves).is_err()
-            || s.solver.solve_in_place(&mut s.flat).is_err()
-        {
-            return Ok(false);
-        }
-        for (v, x) in rhs.iter_mut().zip(s.flat.chunks_exact(3)) {
-            *v = Vector3::new(x[0], x[1], x[2]);
-        }
-        Ok(s.flat.iter().all(|x| x.is_finite()))
+        let held = std::mem::take(&mut self.scratch.held);
+        let solved = self.solve_held(fine, stiffness, rhs, &held);
+        self.scratch.held = held;
+        solved
     }
 
     fn bandwidth(&self, fine: &Rod) -> usize {

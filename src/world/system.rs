@@ -327,6 +327,14 @@ impl System for RodSystem {
             e.add_gradient_and_hessian(&self.rod, kind, gradient, hessian);
         }
     }
+    fn has_hessian_remainder(&self) -> bool {
+        self.acting().any(|e| e.has_hessian_remainder(&self.rod))
+    }
+    fn add_hessian_remainder(&self, v: &[Vector3<Real>], scale: Real, out: &mut [Vector3<Real>]) {
+        for e in self.acting() {
+            e.add_hessian_remainder(&self.rod, v, scale, out);
+        }
+    }
     fn hessian_bandwidth(&self) -> usize {
         let d = self.rod.basis().degree();
         self.acting()

@@ -42,6 +42,7 @@
 //! | span means (tension piecewise constant) | 6.8e-4 / 7.5e-5 / 7.4e-6 | same | same |
 //! | this form | 1.5e-5 / 2.8e-6 / 6.3e-7 | 4.3e-6 / 1.4e-7 / 7.6e-9 | same as 10⁶ |
 //! | consistent Gram, one Neumann term | 4.5e-6 / 4.2e-7 / 7.8e-8 | 4.3e-6 / 1.4e-7 / 7.6e-9 | (bandwidth 3d − 2) |
+//! | consistent Gram ([`super::StretchFormulation::MixedConsistent`]) | 4.5e-6 / 1.5e-7 / 7.9e-9 | 4.3e-6 / 1.4e-7 / 7.6e-9 | same as 10⁶ |
 //!
 //! Reduced integration keeps too many constraints (`d − 1` or more per span); span means
 //! are EA-independent but only first order in the tension. The degree-`d − 1` tension
@@ -55,10 +56,18 @@
 //! O(h²), so where the strain varies along the rod the convergence order drops from
 //! `d + 1` to 2 (the EA = 10² N column; the longitudinal mode of a string stretched by
 //! 20 % is off by 6e-3 at 16 control points, against 1e-5 pointwise). Uniform tension is
-//! exact (the transverse string modes keep 3e-9). [`super::StretchFormulation::Pointwise`]
-//! stays available for such rods. Tension unknowns in the Newton system (the consistent
-//! Gram matrix, banded as a saddle-point system) would remove the price; they are the
-//! planned next step, shared with the twist field.
+//! exact (the transverse string modes keep 3e-9).
+//!
+//! **The consistent Gram matrix** removes the price:
+//! [`super::StretchFormulation::MixedConsistent`] takes the tension coefficients from
+//! \\(\\lambda = EA\\, G^{-1} b\\) ([`super::gram`], [`super::tensions`]), i.e. the energy
+//! \\(\\tfrac{EA}{2}\\lVert\\Pi\\varepsilon\\rVert^2\\) with the L² projection Π: order 4.1 at
+//! EA = 10² N, the longitudinal string mode within 3.4e-9, and the stiff columns
+//! unchanged. The energy and gradient stay O(n) (one banded solve with `G`); the
+//! Hessian's dense part goes through Newton's conjugate-gradient correction. Measured
+//! (callgrind, `examples/step_profile.rs`): the 16-point step costs 1.98 × the lumped
+//! one, so the lumped form stays the default and
+//! [`super::StretchFormulation::Pointwise`] stays available.
 //!
 //! **Knot insertion** maps the curve and the velocities exactly, as always; the mixed
 //! energy is not invariant, because the tension space refines with the knots. By
@@ -69,7 +78,11 @@
 //! the energy by at most \\(\\max(G_{before}, G_{after})\\), a quantity that vanishes as the
 //! rod converges (tested in `tests/adaptivity.rs`: the bound holds on 2 000 random
 //! insertions, and G falls from 46 % to 1.7 % of the strain energy of a wiggly rod
-//! refined from 10 to 201 control points).
+//! refined from 10 to 201 control points). With the consistent Gram matrix the bound is
+//! sharper: the tension spaces are nested, so an insertion can only raise the energy
+//! (the projection onto a larger space), by at most the unresolved
+//! \\(\\tfrac{EA}{2}\\lVert\\varepsilon - \\Pi\\varepsilon\\rVert^2\\) before it, and it stays
+//! below the pointwise energy (`tests/consistent_gram.rs`).
 
 use super::table::{Moment, MAX_WIDTH};
 use super::{tangent, Stretching};
@@ -84,8 +97,6 @@ const BAND: usize = MAX_DEGREE + 1;
 thread_local! {
     /// The `d` open tension functions of a sweep (scratch, reused across calls).
     static RING: RefCell<Vec<Projection>> = const { RefCell::new(Vec::new()) };
-    /// Per tension function: (λ, b), see [`Stretching::with_tensions`].
-    static TENSIONS: RefCell<Vec<(Real, Real)>> = const { RefCell::new(Vec::new()) };
 }
 
 /// One tension function's projection of the current strain, accumulated over its support.
@@ -183,38 +194,9 @@ impl Stretching {
         }
     }
 
-    /// Calls `f` with every tension function's coefficient \\(\\lambda_j = EA\\, b_j/m_j\\) and
-    /// its strain moment \\(b_j\\), `j = 0 ..= n` (zero outside `1 ..= n − 1` and for empty
-    /// supports). One pass over the quadrature points; the buffer is thread-local and
-    /// reused, so no allocation after the first call. `f` must not call back into it.
-    pub(super) fn with_tensions<R>(&self, rod: &Rod, f: impl FnOnce(&[(Real, Real)]) -> R) -> R {
-        TENSIONS.with(|cell| {
-            let mut moments = cell.borrow_mut();
-            moments.clear();
-            moments.resize(rod.len() + 1, (0.0, 0.0));
-            let table = rod.quadrature();
-            for p in 0..table.len() {
-                let qp = table.point(p);
-                let (eps, root) = self.strain(p, &tangent(&qp, &rod.positions));
-                let (wb, wm) = (qp.weight * eps * root, qp.weight * root);
-                // lower[k] is function first + 1 + k.
-                for (m, &phi) in moments[qp.first + 1..].iter_mut().zip(qp.lower) {
-                    m.0 += phi * wb;
-                    m.1 += phi * wm;
-                }
-            }
-            let ea = self.axial_stiffness();
-            for (j, m) in moments.iter_mut().enumerate() {
-                let stretch = if m.1 > 0.0 { ea * m.0 / m.1 } else { 0.0 };
-                *m = (self.multiplier(j) + stretch, m.0);
-            }
-            f(&moments)
-        })
-    }
-
     /// Strain ε and \\(\\sqrt{g_0}\\) at quadrature point `p` with tangent `c1`.
     #[inline]
-    fn strain(&self, p: usize, c1: &Vector3<Real>) -> (Real, Real) {
+    pub(super) fn strain(&self, p: usize, c1: &Vector3<Real>) -> (Real, Real) {
         let g0 = self.g0(p);
         (0.5 * (c1.norm_squared() - g0) / g0, self.root_g0(p))
     }
@@ -249,14 +231,6 @@ impl Stretching {
     /// \\(\\sum_j (\\hat\\lambda_j + \\tfrac\\rho2 b_j/m_j) b_j = \\sum_j \\tfrac12 (\\lambda_j +
     /// \\hat\\lambda_j) b_j\\)).
     pub(super) fn mixed_energy(&self, rod: &Rod) -> Real {
-        if self.table.matches(rod) {
-            let mut energy = 0.0;
-            self.table.for_each(rod, |k| {
-                let (_, tension) = self.function_tension(k.index, k.b, k.m);
-                energy += 0.5 * (tension + self.multiplier(k.index)) * k.b;
-            });
-            return energy;
-        }
         self.with_tensions(rod, |t| {
             t.iter()
                 .enumerate()
@@ -269,11 +243,12 @@ impl Stretching {
     /// field `T` at each quadrature point.
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         if self.table.matches(rod) {
-            self.table.for_each(rod, |k| {
-                let (_, tension) = self.function_tension(k.index, k.b, k.m);
-                add_scaled(gradient, k.first, k.db, tension);
+            return self.with_consistent_tensions(rod, |t| {
+                self.table.for_each(rod, |k| {
+                    let tension = self.tension_of(t, k.index, k.b, k.m);
+                    add_scaled(gradient, k.first, k.db, tension);
+                });
             });
-            return;
         }
         self.with_tensions(rod, |t| {
             let table = rod.quadrature();
@@ -293,16 +268,47 @@ impl Stretching {
         });
     }
 
-    /// Of tension function `index` with strain moment `b` and weight `m`: the stiffness
-    /// `c = EA/m` (0 for an empty support) and the tension \\(\\lambda = \\hat\\lambda + c\\,b\\).
+    /// [`Self::with_tensions`] for the consistent form (whose tensions need a solve over
+    /// the whole rod first); `None` for the lumped one, whose tension function `j` has
+    /// its tension from its own moment ([`Self::tension_of`]): one pass instead of two.
+    fn with_consistent_tensions<R>(
+        &self,
+        rod: &Rod,
+        f: impl FnOnce(Option<&[(Real, Real)]>) -> R,
+    ) -> R {
+        if self.consistent() {
+            self.with_tensions(rod, |t| f(Some(t)))
+        } else {
+            f(None)
+        }
+    }
+
+    /// The tension coefficient of function `index` with moment `b` and weight `m`:
+    /// from `tensions` if given (the consistent form), else
+    /// \\(\\hat\\lambda + EA\\, b/m\\).
     #[inline]
-    fn function_tension(&self, index: usize, b: Real, m: Real) -> (Real, Real) {
-        let c = if m > 0.0 {
+    fn tension_of(
+        &self,
+        tensions: Option<&[(Real, Real)]>,
+        index: usize,
+        b: Real,
+        m: Real,
+    ) -> Real {
+        match tensions {
+            Some(t) => t[index].0,
+            None => self.multiplier(index) + self.lumped_stiffness(m) * b,
+        }
+    }
+
+    /// The lumped material stiffness `EA/m` of a tension function of weight `m` (0 for
+    /// an empty support): the banded part of its Hessian ([`super::tensions`]).
+    #[inline]
+    fn lumped_stiffness(&self, m: Real) -> Real {
+        if m > 0.0 {
             self.axial_stiffness() / m
         } else {
             0.0
-        };
-        (c, self.multiplier(index) + c * b)
+        }
     }
 
     /// Hessian of the mixed form (see the module docs), and with `gradient` the gradient
@@ -322,18 +328,21 @@ impl Stretching {
         let mut lambda = [0.0; MAX_DEGREE];
         // The first quadrature point not yet given its geometric term.
         let mut cursor = 0;
-        self.sweep(rod, |pr| {
-            let (c, tension) = self.function_tension(pr.index, pr.b, pr.m);
-            lambda[pr.index % d] = geometric_tension(kind, tension);
-            let db = &pr.db[..pr.width];
-            if let Some(g) = gradient.as_deref_mut() {
-                add_scaled(g, pr.first, db, tension);
-            }
-            add_outer_products(hessian, pr.first, c, db);
-            // Span `pr.index` has all its tension functions (index − d + 1 ..= index).
-            if pr.index >= d {
-                cursor = self.add_geometric(rod, pr.index, cursor, &lambda[..d], hessian);
-            }
+        self.with_consistent_tensions(rod, |t| {
+            self.sweep(rod, |pr| {
+                let c = self.lumped_stiffness(pr.m);
+                let tension = self.tension_of(t, pr.index, pr.b, pr.m);
+                lambda[pr.index % d] = geometric_tension(kind, tension);
+                let db = &pr.db[..pr.width];
+                if let Some(g) = gradient.as_deref_mut() {
+                    add_scaled(g, pr.first, db, tension);
+                }
+                add_outer_products(hessian, pr.first, c, db);
+                // Span `pr.index` has all its tension functions (index − d + 1 ..= index).
+                if pr.index >= d {
+                    cursor = self.add_geometric(rod, pr.index, cursor, &lambda[..d], hessian);
+                }
+            });
         });
     }
 
@@ -347,13 +356,16 @@ impl Stretching {
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
-        self.table.for_each(rod, |k| {
-            let (c, tension) = self.function_tension(k.index, k.b, k.m);
-            if let Some(g) = gradient.as_deref_mut() {
-                add_scaled(g, k.first, k.db, tension);
-            }
-            add_outer_products(hessian, k.first, c, k.db);
-            add_scaled_identities(hessian, k, geometric_tension(kind, tension));
+        self.with_consistent_tensions(rod, |t| {
+            self.table.for_each(rod, |k| {
+                let c = self.lumped_stiffness(k.m);
+                let tension = self.tension_of(t, k.index, k.b, k.m);
+                if let Some(g) = gradient.as_deref_mut() {
+                    add_scaled(g, k.first, k.db, tension);
+                }
+                add_outer_products(hessian, k.first, c, k.db);
+                add_scaled_identities(hessian, k, geometric_tension(kind, tension));
+            });
         });
     }
 

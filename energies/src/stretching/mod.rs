@@ -29,9 +29,11 @@
 //! degree-`d − 1` splines ([`mixed`]: free of membrane locking), and
 //! [`Stretching::inextensible`] holds that projection at zero ([`multipliers`]).
 
+mod gram;
 mod mixed;
 mod multipliers;
 mod table;
+mod tensions;
 
 pub use multipliers::Multipliers;
 
@@ -54,6 +56,12 @@ pub enum StretchFormulation {
     /// The paper's eq. 12: the strain squared at every quadrature point. Converges at
     /// order `d + 1` on stretchy rods, locks on stiff ones (`EA` ≫ the loads).
     Pointwise,
+    /// Mixed, with the tension coefficients from the consistent Gram matrix instead of
+    /// the lumped one (`stretching/tensions.rs`): locking-free and of order `d + 1` on
+    /// stretchy rods too. Its Hessian has a remainder that is not banded
+    /// ([`Energy::add_hessian_remainder`]), which Newton's method handles by
+    /// preconditioned conjugate gradients.
+    MixedConsistent,
 }
 
 impl StretchFormulation {
@@ -63,7 +71,7 @@ impl StretchFormulation {
     /// Cubic: 4 and 5.
     pub fn points_per_span(self, d: usize) -> usize {
         let integrand = match self {
-            Self::Mixed => 3 * d.saturating_sub(1),
+            Self::Mixed | Self::MixedConsistent => 3 * d.saturating_sub(1),
             Self::Pointwise => 4 * d.saturating_sub(1),
         };
         (d + 1).max(integrand / 2 + 1)
@@ -83,6 +91,8 @@ pub struct Stretching {
     rest: Option<RestMetric>,
     /// The mixed form's integrals for the rod's current basis ([`table`]).
     table: table::TensionTable,
+    /// The tension functions' Gram matrix for the rod's current basis ([`gram`]).
+    gram: gram::TensionGram,
 }
 
 /// A rest curve: its basis and control points.
@@ -127,6 +137,7 @@ impl Stretching {
             multipliers: None,
             rest: None,
             table: table::TensionTable::default(),
+            gram: gram::TensionGram::default(),
         })
     }
 
@@ -140,6 +151,7 @@ impl Stretching {
             multipliers: None,
             rest: None,
             table: table::TensionTable::default(),
+            gram: gram::TensionGram::default(),
         };
         s.make_inextensible(rod);
         s
@@ -204,10 +216,15 @@ impl Stretching {
     /// Tabulates the mixed form's integrals for `rod` ([`table`]); nothing for the
     /// pointwise form.
     fn tabulate(&mut self, rod: &Rod) {
-        if self.formulation == StretchFormulation::Mixed {
+        if self.formulation != StretchFormulation::Pointwise {
             let mut table = std::mem::take(&mut self.table);
             table.build(self, rod);
             self.table = table;
+            if self.consistent() {
+                let mut gram = std::mem::take(&mut self.gram);
+                gram.build(self, rod);
+                self.gram = gram;
+            }
         }
     }
 
@@ -368,8 +385,22 @@ impl Energy for Stretching {
         }
     }
 
+    fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
+        self.consistent()
+    }
+
+    fn add_hessian_remainder(
+        &self,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        self.mixed_remainder(rod, v, scale, out);
+    }
+
     fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
-        if self.formulation == StretchFormulation::Mixed {
+        if self.formulation != StretchFormulation::Pointwise {
             self.mixed_tension(rod, s, out);
             return true;
         }
@@ -388,8 +419,8 @@ impl Energy for Stretching {
     fn bandwidth(&self, rod: &Rod) -> usize {
         let d = rod.basis().degree();
         match self.formulation {
-            StretchFormulation::Mixed => 2 * d - 1,
-            _ => d,
+            StretchFormulation::Pointwise => d,
+            _ => 2 * d - 1,
         }
     }
 
@@ -398,7 +429,7 @@ impl Energy for Stretching {
     }
 
     fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
-        if !self.table.matches(rod) {
+        if !self.table.matches(rod) || (self.consistent() && !self.gram.matches(rod)) {
             self.tabulate(rod);
         }
         Ok(())

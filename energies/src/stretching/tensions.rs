@@ -1,0 +1,266 @@
+//! The mixed form's tension coefficients and the part of its Hessian that is not banded.
+//!
+//! With strain moments \\(b_j\\), weights \\(m_j\\) and the consistent Gram matrix `G`
+//! ([`super::gram`]), the tension coefficients are
+//!
+//! \\[ \lambda = \hat\lambda + EA\, G^{-1} b \quad \text{(finite EA)}, \qquad
+//! \lambda_j = \hat\lambda_j + \rho\, b_j / m_j \quad \text{(inextensible, penalty } \rho),\\]
+//!
+//! the second lumped: there the penalty only enforces \\(b = 0\\), and the constraint, not
+//! the constitutive relation, fixes the tension.
+//!
+//! **The Hessian** of \\(E = \tfrac{EA}{2} b^T G^{-1} b\\) is
+//! \\(EA\, B^T G^{-1} B + \sum_j \lambda_j \nabla^2 b_j\\) with \\(B = \partial b/\partial q\\).
+//! \\(G^{-1}\\) is dense, so [`crate::Energy::add_hessian`] adds the banded
+//! \\(EA\, B^T \mathrm{diag}(m)^{-1} B + \sum_j \lambda_j \nabla^2 b_j\\) and the rest,
+//!
+//! \\[ R = EA\, B^T \left(G^{-1} - \mathrm{diag}(m)^{-1}\right) B \succeq 0, \\]
+//!
+//! is applied to vectors by [`crate::Energy::add_hessian_remainder`] in O(n): one product
+//! with `B`, one banded solve with `G`, one product with \\(B^T\\). Newton's method
+//! solves with the banded part factorised and corrects the step by preconditioned
+//! conjugate gradients (`splinerod_integrators::newton`).
+
+use super::gram::TensionGram;
+use super::table::MAX_WIDTH;
+use super::{tangent, Stretching};
+use nalgebra::Vector3;
+use splinerod_core::{Real, Rod};
+use std::cell::RefCell;
+
+thread_local! {
+    /// Per tension function: (λ, b), see [`Stretching::with_tensions`].
+    static TENSIONS: RefCell<Vec<(Real, Real)>> = const { RefCell::new(Vec::new()) };
+    /// Scratch of the Gram solves.
+    static SOLVE: RefCell<Vec<Real>> = const { RefCell::new(Vec::new()) };
+    /// Scratch of the remainder's lumped part.
+    static LUMPED: RefCell<Vec<Real>> = const { RefCell::new(Vec::new()) };
+    /// The Gram matrix of a rod the energy's own does not match.
+    static GRAM: RefCell<TensionGram> = RefCell::new(TensionGram::default());
+    /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
+    static ROWS: RefCell<Rows> = RefCell::new(Rows::default());
+}
+
+/// The rows of `B = ∂b/∂q` at one state, kept between the remainder products of one
+/// Newton step (conjugate gradients apply `R` several times at the same positions). Keyed
+/// by the energy, the rod's topology epoch and its positions (compared bit for bit), so
+/// a product at any other state recomputes them.
+#[derive(Debug, Default)]
+struct Rows {
+    /// The energy (address and stiffness bits) and the rod's topology epoch.
+    key: Option<(usize, u64, u64)>,
+    positions: Vec<Vector3<Real>>,
+    /// Per tension function: index, first control point, width, weight, moment.
+    functions: Vec<(usize, usize, usize, Real, Real)>,
+    /// `∂b_j/∂q`, `MAX_WIDTH` entries per function.
+    db: Vec<Vector3<Real>>,
+}
+
+impl Rows {
+    /// Whether the rows are those of `energy` at `rod`'s state.
+    fn hold(&self, energy: &Stretching, rod: &Rod) -> bool {
+        self.key == Some(Self::key_of(energy, rod))
+            && self.positions.len() == rod.len()
+            && self.positions.iter().zip(&rod.positions).all(|(a, b)| {
+                a.iter()
+                    .zip(b.iter())
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            })
+    }
+
+    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64) {
+        let address = energy as *const Stretching as usize;
+        (address, energy.stiffness.to_bits(), rod.topology_epoch())
+    }
+
+    /// Recomputes the rows of `energy` at `rod`'s state.
+    fn fill(&mut self, energy: &Stretching, rod: &Rod) {
+        self.key = None;
+        self.functions.clear();
+        self.db.clear();
+        energy.for_each_derivative(rod, |index, first, (m, b), db| {
+            self.functions.push((index, first, db.len(), m, b));
+            let start = self.db.len();
+            self.db.resize(start + MAX_WIDTH, Vector3::zeros());
+            self.db[start..start + db.len()].copy_from_slice(db);
+        });
+        self.positions.clear();
+        self.positions.extend_from_slice(&rod.positions);
+        self.key = Some(Self::key_of(energy, rod));
+    }
+
+    /// Calls `f(j, first, m_j, ∂b_j/∂q_first..)` for every function.
+    fn for_each(&self, mut f: impl FnMut(usize, usize, Real, &[Vector3<Real>])) {
+        for (k, &(index, first, width, m, _)) in self.functions.iter().enumerate() {
+            f(
+                index,
+                first,
+                m,
+                &self.db[k * MAX_WIDTH..k * MAX_WIDTH + width],
+            );
+        }
+    }
+}
+
+impl Stretching {
+    /// Whether the tension comes from the consistent Gram matrix
+    /// ([`super::StretchFormulation::MixedConsistent`] with a finite `EA`), so that the
+    /// Hessian has a remainder.
+    #[inline]
+    pub(super) fn consistent(&self) -> bool {
+        self.formulation == super::StretchFormulation::MixedConsistent && self.multipliers.is_none()
+    }
+
+    /// Calls `f` with every tension function's coefficient \\(\\lambda_j\\) (see the module
+    /// docs) and its strain moment \\(b_j\\), `j = 0 ..= n` (zero outside `1 ..= n − 1` and
+    /// for empty supports). The buffer is thread-local and reused, so no allocation after
+    /// the first call. `f` must not call back into it.
+    pub(super) fn with_tensions<R>(&self, rod: &Rod, f: impl FnOnce(&[(Real, Real)]) -> R) -> R {
+        TENSIONS.with(|cell| {
+            let mut moments = cell.borrow_mut();
+            self.moments(rod, &mut moments);
+            let ea = self.axial_stiffness();
+            if self.consistent() {
+                SOLVE.with(|s| {
+                    let mut x = s.borrow_mut();
+                    x.clear();
+                    x.extend(moments.iter().map(|m| m.0));
+                    self.solve_gram(rod, &mut x);
+                    for (m, x) in moments.iter_mut().zip(x.iter()) {
+                        *m = (ea * x, m.0);
+                    }
+                });
+            } else {
+                for (j, m) in moments.iter_mut().enumerate() {
+                    let stretch = if m.1 > 0.0 { ea * m.0 / m.1 } else { 0.0 };
+                    *m = (self.multiplier(j) + stretch, m.0);
+                }
+            }
+            f(&moments)
+        })
+    }
+
+    /// `(b_j, m_j)` of every tension function into `moments` (length `n + 1`): from the
+    /// table when it matches the rod, else by one pass over the quadrature points.
+    fn moments(&self, rod: &Rod, moments: &mut Vec<(Real, Real)>) {
+        moments.clear();
+        moments.resize(rod.len() + 1, (0.0, 0.0));
+        if self.consistent() {
+            // The rows of B come with the moments; the remainder products reuse them.
+            return ROWS.with(|rows| {
+                let mut rows = rows.borrow_mut();
+                if !rows.hold(self, rod) {
+                    rows.fill(self, rod);
+                }
+                for &(index, _, _, m, b) in &rows.functions {
+                    moments[index] = (b, m);
+                }
+            });
+        }
+        if self.table.matches(rod) {
+            self.table.for_each(rod, |k| moments[k.index] = (k.b, k.m));
+            return;
+        }
+        let table = rod.quadrature();
+        for p in 0..table.len() {
+            let qp = table.point(p);
+            let (eps, root) = self.strain(p, &tangent(&qp, &rod.positions));
+            let (wb, wm) = (qp.weight * eps * root, qp.weight * root);
+            // lower[k] is function first + 1 + k.
+            for (m, &phi) in moments[qp.first + 1..].iter_mut().zip(qp.lower) {
+                m.0 += phi * wb;
+                m.1 += phi * wm;
+            }
+        }
+    }
+
+    /// Solves \\(G x = r\\) in place (`r[j]` for function `j = 0 ..= n`) with the energy's
+    /// Gram matrix, or one built for `rod` if that does not match it.
+    fn solve_gram(&self, rod: &Rod, r: &mut [Real]) {
+        if self.gram.matches(rod) {
+            return self.gram.solve(r);
+        }
+        GRAM.with(|g| {
+            let mut gram = g.borrow_mut();
+            if !gram.matches(rod) {
+                gram.build(self, rod);
+            }
+            gram.solve(r);
+        });
+    }
+
+    /// `out += scale · R v` with the remainder `R` of the module docs (nothing for the
+    /// lumped inextensible form).
+    pub(super) fn mixed_remainder(
+        &self,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        if !self.consistent() {
+            return;
+        }
+        ROWS.with(|rows| {
+            let mut rows = rows.borrow_mut();
+            if !rows.hold(self, rod) {
+                rows.fill(self, rod);
+            }
+            self.remainder_with(&rows, rod, v, scale, out);
+        });
+    }
+
+    /// [`Self::mixed_remainder`] with the rows of `B` at the rod's state.
+    fn remainder_with(
+        &self,
+        rows: &Rows,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        SOLVE.with(|s| {
+            LUMPED.with(|l| {
+                let (mut y, mut lumped) = (s.borrow_mut(), l.borrow_mut());
+                for buffer in [&mut *y, &mut *lumped] {
+                    buffer.clear();
+                    buffer.resize(rod.len() + 1, 0.0);
+                }
+                // y = B v, and its lumped image m⁻¹ B v.
+                rows.for_each(|index, first, m, db| {
+                    let bv: Real = db.iter().zip(&v[first..]).map(|(d, v)| d.dot(v)).sum();
+                    y[index] = bv;
+                    lumped[index] = if m > 0.0 { bv / m } else { 0.0 };
+                });
+                self.solve_gram(rod, &mut y);
+                // out += scale · EA · Bᵀ (G⁻¹ − m⁻¹) B v.
+                let c = scale * self.stiffness;
+                rows.for_each(|index, first, _, db| {
+                    let yi = c * (y[index] - lumped[index]);
+                    for (o, d) in out[first..].iter_mut().zip(db) {
+                        *o += d * yi;
+                    }
+                });
+            });
+        });
+    }
+
+    /// Calls `f(j, first, (m_j, b_j), ∂b_j/∂q_first..)` for every tension function at the
+    /// rod's positions: from the table when it matches, else by a sweep.
+    fn for_each_derivative(
+        &self,
+        rod: &Rod,
+        mut f: impl FnMut(usize, usize, (Real, Real), &[Vector3<Real>]),
+    ) {
+        if self.table.matches(rod) {
+            self.table
+                .for_each(rod, |k| f(k.index, k.first, (k.m, k.b), k.db));
+        } else {
+            self.sweep(rod, |pr| {
+                if pr.width > 0 {
+                    f(pr.index, pr.first, (pr.m, pr.b), &pr.db[..pr.width]);
+                }
+            });
+        }
+    }
+}
