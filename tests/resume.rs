@@ -253,9 +253,9 @@ fn foreign_and_damaged_checkpoints_are_refused() {
     ]);
     let path = ck.join("checkpoint.bin");
     let bytes = std::fs::read(&path).expect("checkpoint");
-    // The header: the format string (length-prefixed), then the version (varint 1).
+    // The header: the format string (length-prefixed), then the version (varint 2).
     let at = 1 + "splinerod-checkpoint".len();
-    assert_eq!(bytes[at], 1, "format version 1");
+    assert_eq!(bytes[at], 2, "format version 2");
     let mut old = bytes.clone();
     old[at] = 0;
     std::fs::write(&path, &old).expect("write");

@@ -26,8 +26,9 @@ use splinerod_core::Real;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// Format version of checkpoint files; a file of another version is refused.
-pub const VERSION: u32 = 1;
+/// Format version of checkpoint files; a file of another version is refused (2: the
+/// solver totals count the remainder's conjugate-gradient iterations).
+pub const VERSION: u32 = 2;
 /// The checkpoint's file name inside its directory.
 pub const FILE: &str = "checkpoint.bin";
 const FORMAT: &str = "splinerod-checkpoint";

@@ -61,6 +61,9 @@ pub struct SolverTotals {
     /// Multiplier updates of an inextensible rod (static: until the mean strain of every
     /// tension function is below 1e-12; dynamic: one per step).
     pub multiplier_updates: usize,
+    /// Conjugate-gradient iterations correcting Newton steps for a Hessian remainder
+    /// (`stretch_formulation = "mixed-consistent"`; 0 otherwise).
+    pub remainder_iterations: usize,
     /// Knots the adapt stage inserted.
     pub knots_inserted: usize,
     /// Knots the adapt stage removed.
@@ -104,6 +107,7 @@ impl SolverTotals {
         self.line_search_cuts += s.line_search_cuts;
         self.continuation_steps += s.continuation_steps;
         self.multiplier_updates += s.multiplier_updates;
+        self.remainder_iterations += s.remainder_iterations;
         self.knots_inserted += report.adapt.inserted;
         self.knots_removed += report.adapt.removed;
         self.redone_steps += report.adapt.redone_steps;
@@ -133,6 +137,7 @@ impl AddAssign for SolverTotals {
         };
         self.continuation_steps += o.continuation_steps;
         self.multiplier_updates += o.multiplier_updates;
+        self.remainder_iterations += o.remainder_iterations;
         self.knots_inserted += o.knots_inserted;
         self.knots_removed += o.knots_removed;
         self.redone_steps += o.redone_steps;

@@ -47,8 +47,9 @@ thread_local! {
 /// a product at any other state recomputes them.
 #[derive(Debug, Default)]
 struct Rows {
-    /// The energy (address and stiffness bits) and the rod's topology epoch.
-    key: Option<(usize, u64, u64)>,
+    /// The energy (address and stiffness bits), the rod's topology epoch and its
+    /// number of quadrature points.
+    key: Option<(usize, u64, u64, usize)>,
     positions: Vec<Vector3<Real>>,
     /// Per tension function: index, first control point, width, weight, moment.
     functions: Vec<(usize, usize, usize, Real, Real)>,
@@ -68,9 +69,15 @@ impl Rows {
             })
     }
 
-    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64) {
+    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64, usize) {
         let address = energy as *const Stretching as usize;
-        (address, energy.stiffness.to_bits(), rod.topology_epoch())
+        let points = rod.quadrature().len();
+        (
+            address,
+            energy.stiffness.to_bits(),
+            rod.topology_epoch(),
+            points,
+        )
     }
 
     /// Recomputes the rows of `energy` at `rod`'s state.
