@@ -302,7 +302,10 @@ fn newton_direction(
     ws.solver.solve_in_place(&mut ws.flat)?;
     ws.constraints.correct(x, &mut ws.flat, &mut ws.multipliers);
     let scale = problem.hessian_scale();
-    if scale > 0.0 && system.has_hessian_remainder() {
+    // With an indefinite P (LDLT of a compressed rod's exact Hessian) conjugate gradients
+    // have no inner product to work in: the step stays P's (measured on a cut rod pulled
+    // into compression: fewer Newton iterations than an unguarded correction).
+    if scale > 0.0 && !ws.solver.is_indefinite() && system.has_hessian_remainder() {
         let (solver, constraints, mu) = (&mut ws.solver, &mut ws.constraints, &mut ws.scratch_mu);
         stats.remainder_iterations += ws.remainder.correct(
             &mut ws.flat,

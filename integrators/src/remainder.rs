@@ -25,7 +25,9 @@
 //! one back-substitution with the factor and one O(n) remainder product.
 //!
 //! The pins' multipliers stay those of the step from `P`: they are exact once Newton has
-//! converged (the step, and with it the difference, is then zero).
+//! converged (the step, and with it the difference, is then zero). `P` must be
+//! definite: Newton skips the correction when it factorised an indefinite matrix (the
+//! exact Hessian of a compressed rod), and converges linearly there.
 
 use crate::IntegratorError;
 use nalgebra::Vector3;
@@ -49,8 +51,9 @@ pub type Remainder<'a> = dyn FnMut(&[Vector3<Real>], Real, &mut [Vector3<Real>])
 /// `z ← 𝒫⁻¹ z`: the solve with the factorised banded matrix (and homogeneous pins).
 pub type Preconditioner<'a> = dyn FnMut(&mut [Real]) -> Result<(), IntegratorError> + 'a;
 
-/// A corrected step larger than this multiple of `P`'s is taken as divergence (possible
-/// only with an indefinite `P`): the correction is dropped.
+/// A corrected step larger than this multiple of `P`'s is taken as divergence (a
+/// safety net: with `P ⪯ A` the correction is smaller than the step): the correction is
+/// dropped.
 pub const DIVERGENCE: Real = 1e3;
 
 /// Buffers of the correction (no allocation once sized).
@@ -113,7 +116,7 @@ impl RemainderCg {
                 break;
             }
             if size.is_nan() || size > DIVERGENCE * start {
-                // An indefinite P can make the iteration diverge: keep P's step.
+                // Not a contraction after all (round-off): keep P's step.
                 self.e.iter_mut().for_each(|e| *e = 0.0);
                 break;
             }
@@ -192,11 +195,10 @@ enum Target {
     Ap,
 }
 
-/// A zero or non-finite inner product ends the iteration. With a definite `P` both are
-/// positive; with an indefinite one (the exact Hessian of a compressed rod) their signs
-/// may change, and the iteration is the same as long as neither vanishes.
+/// An inner product that is not positive (possible only through round-off, `P` and
+/// `A` being definite) ends the iteration.
 fn breakdown(x: Real) -> bool {
-    !x.is_finite() || x.abs() <= Real::MIN_POSITIVE
+    x.is_nan() || x <= Real::MIN_POSITIVE
 }
 
 fn largest(v: &[Real]) -> Real {
