@@ -65,9 +65,11 @@ fn every_integrator_settles_on_the_exact_catenary() {
         let e = distance(&sim.system, &exact).expect("distance");
         let per = iterations.1 as Real / iterations.0 as Real;
         println!("{method}: {e:.2e} m, {per:.1} CG iterations per Newton iteration");
-        // The midpoint rule does not dissipate the high modes: it settles less.
+        // The midpoint rule keeps a high-frequency ringing (control points still move at
+        // 1–4 m/s after 4 s, with the lumped form too; measured 6.9e-4 m here, 5.2e-4 m
+        // lumped): its error is that ringing, not the equilibrium.
         let bound = if method == "implicit-midpoint" {
-            1e-3
+            2e-3
         } else {
             1e-5
         };
