@@ -65,7 +65,7 @@
 //! EA = 10² N, the longitudinal string mode within 3.4e-9, and the stiff columns
 //! unchanged. The energy and gradient stay O(n) (one banded solve with `G`); the
 //! Hessian's dense part goes through Newton's conjugate-gradient correction. Measured
-//! (callgrind, `examples/step_profile.rs`): the 16-point step costs 1.98 × the lumped
+//! (callgrind, `examples/step_profile.rs`): the 16-point step costs 1.85 × the lumped
 //! one, so the lumped form stays the default and
 //! [`super::StretchFormulation::Pointwise`] stays available.
 //!
@@ -244,7 +244,7 @@ impl Stretching {
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         if self.table.matches(rod) {
             return self.with_consistent_tensions(rod, |t| {
-                self.table.for_each(rod, |k| {
+                self.for_each_moment(rod, |k| {
                     let tension = self.tension_of(t, k.index, k.b, k.m);
                     add_scaled(gradient, k.first, k.db, tension);
                 });
@@ -357,7 +357,7 @@ impl Stretching {
         hessian: &mut BlockBanded,
     ) {
         self.with_consistent_tensions(rod, |t| {
-            self.table.for_each(rod, |k| {
+            self.for_each_moment(rod, |k| {
                 let c = self.lumped_stiffness(k.m);
                 let tension = self.tension_of(t, k.index, k.b, k.m);
                 if let Some(g) = gradient.as_deref_mut() {

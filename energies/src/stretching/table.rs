@@ -151,6 +151,26 @@ impl TensionTable {
         }
     }
 
+    /// The [`Moment`] of function `index` from its strain moment, weight and derivatives
+    /// computed before (by [`Self::for_each`] at the same positions).
+    pub fn moment<'a>(
+        &'a self,
+        (index, first): (usize, usize),
+        (b, m): (Real, Real),
+        db: &'a [Vector3<Real>],
+    ) -> Moment<'a> {
+        let j = index - 1;
+        Moment {
+            index,
+            first,
+            b,
+            m,
+            db,
+            g: &self.g[j * self.stride..(j + 1) * self.stride],
+            rows: &self.rows,
+        }
+    }
+
     /// Calls `f` with every tension function's [`Moment`] at the rod's positions, in
     /// increasing order (functions with an empty support have width 0). No allocation.
     pub fn for_each(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {

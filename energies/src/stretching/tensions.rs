@@ -22,7 +22,7 @@
 //! conjugate gradients (`splinerod_integrators::newton`).
 
 use super::gram::TensionGram;
-use super::table::MAX_WIDTH;
+use super::table::{Moment, TensionTable, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::Vector3;
 use splinerod_core::{Real, Rod};
@@ -94,6 +94,15 @@ impl Rows {
         self.positions.clear();
         self.positions.extend_from_slice(&rod.positions);
         self.key = Some(Self::key_of(energy, rod));
+    }
+
+    /// Calls `f` with every function's [`Moment`] (`table` must be the one the rows
+    /// were computed from).
+    fn for_each_moment(&self, table: &TensionTable, mut f: impl FnMut(&Moment<'_>)) {
+        for (k, &(index, first, width, m, b)) in self.functions.iter().enumerate() {
+            let db = &self.db[k * MAX_WIDTH..k * MAX_WIDTH + width];
+            f(&table.moment((index, first), (b, m), db));
+        }
     }
 
     /// Calls `f(j, first, m_j, ∂b_j/∂q_first..)` for every function.
@@ -178,6 +187,24 @@ impl Stretching {
                 m.0 += phi * wb;
                 m.1 += phi * wm;
             }
+        }
+    }
+
+    /// Calls `f` with every tension function's [`Moment`] at the rod's positions, from
+    /// the rows [`Self::with_tensions`] kept for the consistent form (no second pass over
+    /// the table), else from the table.
+    pub(super) fn for_each_moment(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {
+        let cached = self.consistent()
+            && ROWS.with(|rows| {
+                let rows = rows.borrow();
+                let hold = rows.hold(self, rod);
+                if hold {
+                    rows.for_each_moment(&self.table, &mut f);
+                }
+                hold
+            });
+        if !cached {
+            self.table.for_each(rod, f);
         }
     }
 
