@@ -180,10 +180,11 @@ impl Energy for OnSegment {
         });
     }
 
-    fn has_hessian_remainder(&self, rod: &Rod) -> bool {
-        self.with(rod, false, |local| {
-            self.inner.has_hessian_remainder(&local.rod)
-        })
+    /// Asked once per Newton iteration: answered on the segment's copy as it is (a
+    /// property of the energy, not of the state), without copying the state in.
+    fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
+        let copies = self.copies.lock().unwrap_or_else(|e| e.into_inner());
+        self.inner.has_hessian_remainder(&copies.main.rod)
     }
 
     fn add_hessian_remainder(
