@@ -9,7 +9,6 @@ use splinerod::elastic_catenary::ElasticCatenary;
 use splinerod::energies::Energy;
 use splinerod::locking::{distance, static_error, STIFFNESSES, WEIGHT};
 use splinerod::prelude::*;
-use splinerod::run;
 
 const CONSISTENT: StretchFormulation = StretchFormulation::MixedConsistent;
 
@@ -157,7 +156,6 @@ fn an_unknown_formulation_names_the_field() {
     let text = hanging(8, 1e2, "method = \"static\"").replace("mixed-consistent", "consistent");
     let error = Scene::from_toml(&text).expect_err("unknown").to_string();
     assert!(error.contains("stretch_formulation"), "{error}");
-    let _ = run;
 }
 
 /// The hanging nylon suture of the hard cases (E = 750 MPa, r = 0.2 mm, L = 0.3 m,

@@ -19,7 +19,7 @@
 //! is applied to vectors by [`crate::Energy::add_hessian_remainder`] in O(n): one product
 //! with `B`, one banded solve with `G`, one product with \\(B^T\\). Newton's method
 //! solves with the banded part factorised and corrects the step by preconditioned
-//! conjugate gradients (`splinerod_integrators::newton`).
+//! conjugate gradients (`splinerod_integrators::remainder`).
 
 use super::gram::TensionGram;
 use super::table::{Moment, TensionTable, MAX_WIDTH};
