@@ -16,6 +16,8 @@ pub enum Error {
         file: Option<String>,
         /// Line and column (1-based) of the offending text, if known.
         position: Option<(usize, usize)>,
+        /// Dotted path of the offending field (`rod.rest_length`), if known.
+        field: Option<String>,
         /// What the parser said.
         message: String,
     },
@@ -126,6 +128,21 @@ impl Error {
         Self::Study {
             problem: problem.into(),
             reason: reason.into(),
+        }
+    }
+
+    /// The dotted path of the scene field (or command-line option) this error is about,
+    /// if it names one: the field out of range, missing, unknown or of the wrong type;
+    /// for an ensemble member's error, the field its error names.
+    pub fn field_name(&self) -> Option<&str> {
+        match self {
+            Self::InvalidField { field, .. }
+            | Self::MissingField { field, .. }
+            | Self::TooLarge { field, .. }
+            | Self::OutOfMemory { field, .. } => Some(field),
+            Self::Parse { field, .. } => field.as_deref(),
+            Self::Member { source, .. } => source.field_name(),
+            _ => None,
         }
     }
 

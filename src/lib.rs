@@ -76,6 +76,7 @@ pub use error::Error;
 pub use run::knot_track::KnotTrack;
 pub use run::observe::{Frame, Observer};
 pub use run::runner::{run, run_observed, RunResult};
+pub use run::session::SceneRun;
 pub use scene::Scene;
 pub use world::ensemble::Ensemble;
 pub use world::grab::Grab;

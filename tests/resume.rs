@@ -253,9 +253,10 @@ fn foreign_and_damaged_checkpoints_are_refused() {
     ]);
     let path = ck.join("checkpoint.bin");
     let bytes = std::fs::read(&path).expect("checkpoint");
-    // The header: the format string (length-prefixed), then the version (varint 2).
+    // The header: the format string (length-prefixed), then the version (a varint).
     let at = 1 + "splinerod-checkpoint".len();
-    assert_eq!(bytes[at], 2, "format version 2");
+    let version = splinerod::run::checkpoint::VERSION;
+    assert_eq!(u32::from(bytes[at]), version, "format version {version}");
     let mut old = bytes.clone();
     old[at] = 0;
     std::fs::write(&path, &old).expect("write");

@@ -27,8 +27,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Format version of checkpoint files; a file of another version is refused (2: the
-/// solver totals count the remainder's conjugate-gradient iterations).
-pub const VERSION: u32 = 2;
+/// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
+/// at the start of the last step, so that a run resumed at its end reports the same
+/// final error estimate).
+pub const VERSION: u32 = 3;
 /// The checkpoint's file name inside its directory.
 pub const FILE: &str = "checkpoint.bin";
 const FORMAT: &str = "splinerod-checkpoint";

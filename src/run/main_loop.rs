@@ -23,6 +23,7 @@ use crate::run::runner::{finish, frame, notify_finish, probes_at_start, ContactS
 use crate::run::runner::{RunControl, RunResult, SolverTotals};
 use crate::scene::{Method, Scene};
 use crate::world::estimate::EstimateOutput;
+use crate::world::saved::SimulationState;
 use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
 use splinerod_core::Real;
 use splinerod_energies::EnergySummary;
@@ -168,14 +169,14 @@ impl CutSchedule {
 }
 
 /// One member of a run.
-struct Member {
-    scene: Scene,
-    tally: Tally,
+pub(crate) struct Member {
+    pub(crate) scene: Scene,
+    pub(crate) tally: Tally,
 }
 
 /// The members of `scene`: the ensemble's (those of `only`, if given), or the scene
 /// itself.
-fn build_members(
+pub(crate) fn build_members(
     scene: &Scene,
     only: Option<&Range<usize>>,
 ) -> Result<Vec<(Scene, Simulation)>, Error> {
@@ -220,15 +221,15 @@ fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Resul
 }
 
 /// A run under way: its members, the loop's counters and what it measured.
-struct Run {
-    members: Vec<Member>,
-    ensemble: Ensemble,
-    step_seconds: Vec<Real>,
+pub(crate) struct Run {
+    pub(crate) members: Vec<Member>,
+    pub(crate) ensemble: Ensemble,
+    pub(crate) step_seconds: Vec<Real>,
     /// Stages done.
-    stage: usize,
+    pub(crate) stage: usize,
     /// Wall time of the stages a checkpointed run did before this process.
-    wall_before: Real,
-    only: Option<Range<usize>>,
+    pub(crate) wall_before: Real,
+    pub(crate) only: Option<Range<usize>>,
 }
 
 /// Runs `scene` to its end (only the ensemble members of `only`, if given), showing
@@ -249,7 +250,7 @@ pub(crate) fn run_scene(
 }
 
 /// The members of `scene` (of `only`) built, prepared and tallied at their start.
-fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Run, Error> {
+pub(crate) fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Run, Error> {
     let mut members = Vec::new();
     let mut sims = Vec::new();
     for (member_scene, mut sim) in build_members(scene, only)? {
@@ -310,32 +311,13 @@ pub(crate) fn resume_scene(
 ) -> Result<RunResult, Error> {
     let only = checkpoint.only.map(|(a, b)| a..b);
     check_memory(scene, only.as_ref())?;
-    let built = build_members(scene, only.as_ref())?;
-    if built.len() != checkpoint.members.len() || observers.len() != checkpoint.observers.len() {
-        return Err(Error::field(
-            "checkpoint",
-            checkpoint.members.len(),
-            "members or outputs do not match the scene and command line",
-        ));
+    if observers.len() != checkpoint.observers.len() {
+        return Err(mismatched_checkpoint(checkpoint.members.len()));
     }
-    let mut members = Vec::new();
-    let mut sims = Vec::new();
-    for ((member_scene, mut sim), state) in built.into_iter().zip(checkpoint.members) {
-        sim.restore_state(&state.simulation)?;
-        members.push(Member {
-            scene: member_scene,
-            tally: state.tally,
-        });
-        sims.push(sim);
-    }
-    let run = Run {
-        members,
-        ensemble: Ensemble::new(sims),
-        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
-        stage: checkpoint.stage,
-        wall_before: checkpoint.wall_seconds,
-        only,
-    };
+    let states = checkpoint.members.into_iter();
+    let states = states.map(|m| (m.simulation, m.tally));
+    let mut run = restored_run(scene, only, states, checkpoint.stage)?;
+    run.wall_before = checkpoint.wall_seconds;
     let lead = &run.ensemble.members[0];
     let now = frame(scene, &lead.system, lead.time, lead.steps);
     for (o, state) in observers.iter_mut().zip(&checkpoint.observers) {
@@ -344,8 +326,49 @@ pub(crate) fn resume_scene(
     advance(scene, run, observers, control)
 }
 
+/// The members of `scene` (those of `only`) rebuilt and put in the saved `states`
+/// (simulation state and tally, one per member), `stages` stages into the run.
+pub(crate) fn restored_run(
+    scene: &Scene,
+    only: Option<Range<usize>>,
+    states: impl ExactSizeIterator<Item = (SimulationState, Tally)>,
+    stages: usize,
+) -> Result<Run, Error> {
+    let built = build_members(scene, only.as_ref())?;
+    if built.len() != states.len() {
+        return Err(mismatched_checkpoint(states.len()));
+    }
+    let mut members = Vec::new();
+    let mut sims = Vec::new();
+    for ((member_scene, mut sim), (state, tally)) in built.into_iter().zip(states) {
+        sim.restore_state(&state)?;
+        members.push(Member {
+            scene: member_scene,
+            tally,
+        });
+        sims.push(sim);
+    }
+    Ok(Run {
+        members,
+        ensemble: Ensemble::new(sims),
+        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
+        stage: stages,
+        wall_before: 0.0,
+        only,
+    })
+}
+
+/// A checkpoint of `members` members that does not fit the scene and command line.
+fn mismatched_checkpoint(members: usize) -> Error {
+    Error::field(
+        "checkpoint",
+        members,
+        "members or outputs do not match the scene and command line",
+    )
+}
+
 /// Refuses a run whose memory could not exist (for a shard: its members only).
-fn check_memory(scene: &Scene, only: Option<&Range<usize>>) -> Result<(), Error> {
+pub(crate) fn check_memory(scene: &Scene, only: Option<&Range<usize>>) -> Result<(), Error> {
     match only {
         Some(range) => scene.with_member_count(range.len()).check_memory(),
         None => scene.check_memory(),
@@ -390,7 +413,7 @@ fn advance(
 }
 
 /// One stage of every member, recorded, shown to the observers.
-fn stage(
+pub(crate) fn stage(
     scene: &Scene,
     run: &mut Run,
     observers: &mut [&mut dyn Observer],
@@ -462,7 +485,7 @@ fn save(
 }
 
 /// The result of a run whose stages are done (or stopped).
-fn conclude(
+pub(crate) fn conclude(
     scene: &Scene,
     run: Run,
     observers: &mut [&mut dyn Observer],
@@ -476,29 +499,54 @@ fn conclude(
         only,
         ..
     } = run;
-    for (m, sim) in members.iter_mut().zip(ensemble.members.iter_mut()) {
+    close(&mut members, &mut ensemble.members)?;
+    let first_index = only.map_or(0, |r| r.start);
+    let sims = &ensemble.members;
+    let result = report(scene, members, sims, first_index, wall, &mut step_seconds)?;
+    let result = RunResult {
+        interrupted,
+        ..result
+    };
+    let lead = &ensemble.members[0];
+    notify_finish(
+        observers,
+        &frame(scene, &lead.system, lead.time, lead.steps),
+        result,
+    )
+}
+
+/// Makes every member's final records (the error estimate of the final state, the
+/// knot's last record) in its tally.
+pub(crate) fn close(members: &mut [Member], sims: &mut [Simulation]) -> Result<(), Error> {
+    for (m, sim) in members.iter_mut().zip(sims) {
         m.tally.close(sim)?;
     }
-    let first_index = only.map_or(0, |r| r.start);
+    Ok(())
+}
+
+/// The result of a run from its closed `members`' tallies and the simulations `sims`
+/// (read only), the first member being the scene's member `first_index`.
+pub(crate) fn report(
+    scene: &Scene,
+    mut members: Vec<Member>,
+    sims: &[Simulation],
+    first_index: usize,
+    wall: Real,
+    step_seconds: &mut [Real],
+) -> Result<RunResult, Error> {
     let summaries = if scene.ensemble.is_some() {
-        let all = members.iter().zip(&ensemble.members).enumerate();
+        let all = members.iter().zip(sims).enumerate();
         all.map(|(i, (m, sim))| summarize(first_index + i, &m.scene, sim, &m.tally))
             .collect::<Result<Vec<_>, _>>()?
     } else {
         Vec::new()
     };
     let solver = ensemble_totals(&members);
-    let lead = &ensemble.members[0];
     let mut tally = members.swap_remove(0).tally;
     tally.solver = solver;
-    let mut result = finish(scene, lead, tally, wall, &mut step_seconds)?;
+    let mut result = finish(scene, &sims[0], tally, wall, step_seconds)?;
     result.ensemble = summaries;
-    result.interrupted = interrupted;
-    notify_finish(
-        observers,
-        &frame(scene, &lead.system, lead.time, lead.steps),
-        result,
-    )
+    Ok(result)
 }
 
 /// Solver counters summed over every member.

@@ -10,6 +10,7 @@ pub(crate) mod main_loop;
 pub mod observe;
 pub mod rods;
 pub mod runner;
+pub mod session;
 pub mod shard;
 pub(crate) mod summary;
 pub(crate) mod twist;

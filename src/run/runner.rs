@@ -410,7 +410,7 @@ pub(crate) fn finish(
 /// One force per `[[pins]]` entry: an exact clamp's tangent pin (after them in the
 /// system) adds its force to its clamp's (the pair's net force; their moment is the
 /// clamp's bending moment).
-fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
+pub(crate) fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
     let mut forces = sim.integrator.pin_forces();
     for (i, j) in clamp_tangents(scene, sim, forces.len()) {
         let extra = forces[i];

@@ -294,11 +294,15 @@ impl Scene {
         })?;
         Self::from_toml(&text).map_err(|e| match e {
             Error::Parse {
-                position, message, ..
+                position,
+                message,
+                field,
+                ..
             } => Error::Parse {
                 file: Some(path.display().to_string()),
                 position,
                 message,
+                field,
             },
             other => other,
         })
@@ -471,6 +475,10 @@ fn parse_error(text: &str, e: &toml::de::Error) -> Error {
         _ if !path.is_empty() => message.push_str(&format!(" in `{path}`")),
         _ => {}
     }
+    let field = match named {
+        Some(p) => message[p.len()..].split('`').next().map(str::to_string),
+        None => Some(path.to_string()).filter(|p| !p.is_empty()),
+    };
     match e.span() {
         Some(span) => {
             let before = text.get(..span.start).unwrap_or(text);
@@ -480,12 +488,14 @@ fn parse_error(text: &str, e: &toml::de::Error) -> Error {
                 file: None,
                 position: Some((line, column)),
                 message,
+                field,
             }
         }
         None => Error::Parse {
             file: None,
             position: None,
             message,
+            field,
         },
     }
 }

@@ -85,6 +85,9 @@ pub struct SimulationState {
     pub positions: Vec<[Real; 3]>,
     /// Their velocities, m/s.
     pub velocities: Vec<[Real; 3]>,
+    /// The velocities at the start of the last step, m/s (the error estimate's inertial
+    /// load; empty before the first step).
+    pub start_velocities: Vec<[Real; 3]>,
     /// Each pin's position, m.
     pub pins: Vec<[Real; 3]>,
     /// Each grab's state.
@@ -132,6 +135,7 @@ impl Simulation {
             knot_changes: system.knot_changes.clone(),
             positions: arrays(&system.rod.positions),
             velocities: arrays(&system.rod.velocities),
+            start_velocities: arrays(&self.saved.1),
             pins: system.pins.iter().map(|p| p.position.into()).collect(),
             grabs: system
                 .grabs
@@ -190,6 +194,7 @@ impl Simulation {
     /// The clocks, the controller, the adapter and the estimator.
     fn restore_rest(&mut self, state: &SimulationState) -> Result<(), Error> {
         (self.time, self.steps, self.last_dt) = (state.time, state.steps, state.last_dt);
+        self.saved.1 = vectors(&state.start_velocities);
         self.system.time = state.system_time;
         let (next, ceiling, streak) = state.substep;
         self.substep.restore(crate::world::substep::SubstepMemory {

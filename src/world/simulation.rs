@@ -55,7 +55,7 @@ pub struct Simulation {
     saved_time: Real,
     saved_substep: SubstepMemory,
     interactions: Vec<Real>,
-    saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
+    pub(crate) saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
 }
 
 impl Simulation {
