@@ -1,0 +1,67 @@
+"""splinerod: thin elastic rods (threads, sutures, cables, hair) as B-spline curves
+whose control points are the degrees of freedom, with adaptive resolution.
+
+Run a scene::
+
+    import splinerod
+    scene = splinerod.Scene.from_toml("scenes/hanging_cable.toml")
+    sim = scene.simulation()
+    sim.run()                       # to the scene's duration
+    print(sim.positions([0.25, 0.5, 0.75]))
+    result = sim.result()           # the JSON of `splinerod run --json`, as a dict
+
+or build a rod in code (``Material``, ``BSplineSpace``, ``Rod``, ``Pin``, energies,
+integrators, ``RodSystem``, ``Simulation``). Bad input raises ``SceneError`` (a
+``ValueError``) whose ``field`` names the field; a run that cannot go on raises
+``SplinerodError`` (a ``RuntimeError``).
+"""
+
+from ._splinerod import (
+    Bdf2,
+    Bending,
+    BSplineSpace,
+    Clamp,
+    Energy,
+    Gravity,
+    ImplicitEuler,
+    ImplicitMidpoint,
+    Integrator,
+    Material,
+    Pin,
+    PointForce,
+    PointSpring,
+    Rod,
+    RodSystem,
+    Scene,
+    SceneError,
+    Simulation,
+    SplinerodError,
+    StaticSolver,
+    Stretching,
+    __version__,
+)
+
+__all__ = [
+    "Bdf2",
+    "Bending",
+    "BSplineSpace",
+    "Clamp",
+    "Energy",
+    "Gravity",
+    "ImplicitEuler",
+    "ImplicitMidpoint",
+    "Integrator",
+    "Material",
+    "Pin",
+    "PointForce",
+    "PointSpring",
+    "Rod",
+    "RodSystem",
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "SplinerodError",
+    "StaticSolver",
+    "Stretching",
+    "__version__",
+]

@@ -1,0 +1,46 @@
+//! splinerod for Python: the extension module `splinerod._splinerod`, re-exported by the
+//! `splinerod` package (python/splinerod/__init__.py).
+//!
+//! Thin over the Rust API: a `Scene` from TOML or a dict, its `Simulation` stepped with
+//! the GIL released, state as numpy arrays (one copy per call); rods built in code from
+//! `Material`, `BSplineSpace`, `Rod`, `Pin`, energies and integrators. Errors surface as
+//! `SceneError` (bad input, with the field named), `SplinerodError` (the run could not
+//! go on, or an internal panic) and `OSError` (see `errors`).
+
+mod arrays;
+mod errors;
+mod model;
+mod scene;
+mod simulation;
+mod system;
+
+use pyo3::prelude::*;
+
+/// The compiled core of the `splinerod` package.
+#[pymodule]
+fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("SceneError", py.get_type::<errors::SceneError>())?;
+    m.add("SplinerodError", py.get_type::<errors::SplinerodError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_class::<scene::Scene>()?;
+    m.add_class::<simulation::Simulation>()?;
+    m.add_class::<model::Material>()?;
+    m.add_class::<model::BSplineSpace>()?;
+    m.add_class::<model::Rod>()?;
+    m.add_class::<model::Pin>()?;
+    m.add_class::<system::RodSystem>()?;
+    m.add_class::<system::Energy>()?;
+    m.add_class::<system::Stretching>()?;
+    m.add_class::<system::Bending>()?;
+    m.add_class::<system::Gravity>()?;
+    m.add_class::<system::PointSpring>()?;
+    m.add_class::<system::PointForce>()?;
+    m.add_class::<system::Clamp>()?;
+    m.add_class::<system::Integrator>()?;
+    m.add_class::<system::ImplicitEuler>()?;
+    m.add_class::<system::ImplicitMidpoint>()?;
+    m.add_class::<system::Bdf2>()?;
+    m.add_class::<system::StaticSolver>()?;
+    Ok(())
+}

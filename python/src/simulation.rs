@@ -1,0 +1,478 @@
+//! `Simulation`: a scene's run (every member of an `[ensemble]`) or a rod built in
+//! code, stepped from Python with the GIL released, its state read as numpy arrays.
+//!
+//! A scene's simulation drives [`splinerod::SceneRun`], the CLI's own run loop one stage
+//! at a time, so `sim.run()` followed by `sim.to_json()` reports what `splinerod run
+//! --json` writes, bit for bit but the wall-clock fields. Properties (`control_points`,
+//! `velocities`, ...) describe member 0; methods take `member=`; `stacked_*` methods
+//! return one array over all members.
+
+use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
+use crate::errors::{guard, scene_error, IntoPyResult, SplinerodError};
+use crate::system::{Integrator, RodSystem};
+use nalgebra::Vector3;
+use numpy::{PyArray1, PyArray2, PyArray3};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict};
+use splinerod::{Error, Real, SceneRun};
+
+/// What advances: a scene's run, or one simulation built in code with its step.
+enum Driver {
+    Scene(Box<SceneRun>),
+    Code {
+        sim: Box<splinerod::Simulation>,
+        dt: Real,
+    },
+}
+
+impl Driver {
+    /// Makes `n` steps (static: solves).
+    fn advance(&mut self, n: usize) -> Result<(), Error> {
+        match self {
+            Self::Scene(run) => run.advance(n),
+            Self::Code { sim, dt } => {
+                for _ in 0..n {
+                    match sim.integrator.solves_equilibrium() {
+                        true => sim.settle()?,
+                        false => sim.step(*dt)?,
+                    };
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn sims(&self) -> &[splinerod::Simulation] {
+        match self {
+            Self::Scene(run) => run.members(),
+            Self::Code { sim, .. } => std::slice::from_ref(sim),
+        }
+    }
+
+    fn sim_mut(&mut self, index: usize) -> Option<&mut splinerod::Simulation> {
+        match self {
+            Self::Scene(run) => run.member_mut(index),
+            Self::Code { sim, .. } => (index == 0).then_some(sim.as_mut()),
+        }
+    }
+
+    fn is_static(&self) -> bool {
+        self.sims()[0].integrator.solves_equilibrium()
+    }
+}
+
+/// A simulation: `Scene.simulation()` or `Simulation(system, integrator, dt)`.
+#[pyclass(module = "splinerod")]
+pub struct Simulation {
+    driver: Driver,
+    poisoned: bool,
+}
+
+impl Simulation {
+    /// The simulation of a scene's run.
+    pub fn from_scene(run: SceneRun) -> Self {
+        Self {
+            driver: Driver::Scene(Box::new(run)),
+            poisoned: false,
+        }
+    }
+
+    /// Member `index`, or `SceneError` naming `member`.
+    fn member(&self, py: Python<'_>, index: usize) -> PyResult<&splinerod::Simulation> {
+        let count = self.driver.sims().len();
+        self.driver
+            .sims()
+            .get(index)
+            .ok_or_else(|| no_member(py, index, count))
+    }
+
+    /// The members `member` selects: one, or all for `None`.
+    fn selected(&self, py: Python<'_>, member: Option<usize>) -> PyResult<std::ops::Range<usize>> {
+        let count = self.driver.sims().len();
+        match member {
+            None => Ok(0..count),
+            Some(i) if i < count => Ok(i..i + 1),
+            Some(i) => Err(no_member(py, i, count)),
+        }
+    }
+
+    /// Steps a dynamic simulation needs to reach `until` (the scene's end by default).
+    fn steps_until(&self, py: Python<'_>, until: Option<Real>) -> PyResult<usize> {
+        let (done, scheduled, dt) = match &self.driver {
+            Driver::Scene(run) => (run.stages_done(), Some(run.stage_count()), run.dt()),
+            Driver::Code { sim, dt } => (sim.steps, None, *dt),
+        };
+        if self.driver.is_static() {
+            return Ok(usize::from(done == 0));
+        }
+        let Some(until) = until else {
+            return scheduled.map(|n| n.saturating_sub(done)).ok_or_else(|| {
+                scene_error(
+                    py,
+                    Some("until"),
+                    "a simulation built in code needs `until`",
+                )
+            });
+        };
+        let until = crate::arrays::finite(py, "until", until)?;
+        let left = (until - self.driver.sims()[0].time) / dt;
+        Ok((left * (1.0 - 1e-12)).ceil().max(0.0) as usize)
+    }
+
+    /// Makes `n` steps with the GIL released.
+    fn advance(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
+        let driver = &mut self.driver;
+        guard(&mut self.poisoned, || {
+            py.detach(|| driver.advance(n)).py_err(py)
+        })
+    }
+}
+
+/// `SceneError`: there is no member `index` of `count`.
+fn no_member(py: Python<'_>, index: usize, count: usize) -> PyErr {
+    let message = format!("`member` = {index}: the simulation has {count} member(s)");
+    scene_error(py, Some("member"), message)
+}
+
+#[pymethods]
+impl Simulation {
+    /// A simulation of `system` advanced by `integrator` (default `ImplicitEuler()`) in
+    /// steps of `dt` seconds (not needed by the static solver).
+    #[new]
+    #[pyo3(signature = (system, integrator = None, dt = None))]
+    fn new(
+        py: Python<'_>,
+        system: &RodSystem,
+        integrator: Option<PyRef<'_, Integrator>>,
+        dt: Option<Real>,
+    ) -> PyResult<Self> {
+        let integrator = match integrator {
+            Some(i) => i.build(py)?,
+            None => Integrator::default_euler().build(py)?,
+        };
+        let statics = integrator.solves_equilibrium();
+        let dt = match (dt, statics) {
+            (Some(dt), _) if dt.is_finite() && dt > 0.0 => dt,
+            (None, true) => 0.0,
+            (dt, _) => {
+                let message =
+                    format!("`dt` = {dt:?}: a time integrator needs a finite, positive step");
+                return Err(scene_error(py, Some("dt"), message));
+            }
+        };
+        let sim = splinerod::Simulation::new(system.build(py)?, integrator);
+        Ok(Self {
+            driver: Driver::Code {
+                sim: Box::new(sim),
+                dt,
+            },
+            poisoned: false,
+        })
+    }
+
+    /// Makes `n` time steps (a static simulation: `n` equilibrium solves), every member
+    /// of an ensemble. A failing step raises `SplinerodError`; its member keeps the state
+    /// before that step.
+    #[pyo3(signature = (n = 1))]
+    fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
+        self.advance(py, n)
+    }
+
+    /// Steps until time `until` (default: the scene's duration; a static simulation:
+    /// its one solve), calling `callback(sim)` every `every` steps; a callback that
+    /// returns `False` stops the run. Returns the number of steps made.
+    #[pyo3(signature = (until = None, every = 1, callback = None))]
+    fn run(
+        slf: &Bound<'_, Self>,
+        until: Option<Real>,
+        every: usize,
+        callback: Option<Bound<'_, PyAny>>,
+    ) -> PyResult<usize> {
+        let py = slf.py();
+        if every == 0 {
+            return Err(scene_error(
+                py,
+                Some("every"),
+                "`every` = 0: must be at least 1",
+            ));
+        }
+        let total = slf.borrow().steps_until(py, until)?;
+        let mut made = 0;
+        while made < total {
+            let chunk = every.min(total - made);
+            slf.borrow_mut().advance(py, chunk)?;
+            made += chunk;
+            if let Some(f) = &callback {
+                let answer = f.call1((slf,))?;
+                if answer.is(PyBool::new(py, false)) {
+                    break;
+                }
+            }
+        }
+        Ok(made)
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn time(&self) -> Real {
+        self.driver.sims()[0].time
+    }
+
+    /// Time steps made.
+    #[getter]
+    fn steps(&self) -> usize {
+        self.driver.sims()[0].steps
+    }
+
+    /// The time step, s (0 for a static simulation).
+    #[getter]
+    fn dt(&self) -> Real {
+        match &self.driver {
+            Driver::Scene(run) => run.dt(),
+            Driver::Code { dt, .. } => *dt,
+        }
+    }
+
+    /// Number of members (an `[ensemble]`'s count, else 1).
+    #[getter]
+    fn members(&self) -> usize {
+        self.driver.sims().len()
+    }
+
+    /// Member 0's control points, `(n, 3)`, m.
+    #[getter]
+    fn control_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
+        points_array(py, &self.driver.sims()[0].system.rod.positions)
+    }
+
+    /// Member 0's control-point velocities, `(n, 3)`, m/s; settable.
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
+        points_array(py, &self.driver.sims()[0].system.rod.velocities)
+    }
+
+    #[setter(velocities)]
+    fn set_velocities_property(&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        self.set_velocities(value, Some(0))
+    }
+
+    /// Sets the control-point velocities (`(n, 3)`, m/s) of `member` (all members if
+    /// `None`).
+    #[pyo3(signature = (velocities, member = None))]
+    fn set_velocities(
+        &mut self,
+        velocities: &Bound<'_, PyAny>,
+        member: Option<usize>,
+    ) -> PyResult<()> {
+        let py = velocities.py();
+        for i in self.selected(py, member)? {
+            let n = self.driver.sims()[i].system.rod.len();
+            let v = points_from(velocities, "velocities", Some(n))?;
+            if let Some(sim) = self.driver.sim_mut(i) {
+                sim.system.rod.velocities = v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Member 0's knot vector, m.
+    #[getter]
+    fn knots<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<Real>> {
+        let rod = &self.driver.sims()[0].system.rod;
+        values_array(py, rod.basis().knots().to_vec())
+    }
+
+    /// Where member 0's pins hold the rod, `(k, 3)`, m (a scene's pins first, in order).
+    #[getter]
+    fn pins<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
+        let pins = &self.driver.sims()[0].system.pins;
+        let points: Vec<Vector3<Real>> = pins.iter().map(|p| p.position).collect();
+        points_array(py, &points)
+    }
+
+    /// Moves pin `index` to `position` (m) in `member` (all members if `None`), from the
+    /// next step on; a clamp's tangent pin moves with it. A pin driven by a `path` is
+    /// moved by its path again at the next step.
+    #[pyo3(signature = (index, position, member = None))]
+    fn set_pin(
+        &mut self,
+        index: usize,
+        position: &Bound<'_, PyAny>,
+        member: Option<usize>,
+    ) -> PyResult<()> {
+        let py = position.py();
+        let target = crate::arrays::vector_from(position, "position")?;
+        for i in self.selected(py, member)? {
+            let pins = &self.driver.sims()[i].system.pins;
+            let Some(pin) = pins.get(index).copied() else {
+                let message = format!("`index` = {index}: the rod has {} pin(s)", pins.len());
+                return Err(scene_error(py, Some("index"), message));
+            };
+            let shift = target - pin.position;
+            if let Some(sim) = self.driver.sim_mut(i) {
+                for (j, p) in sim.system.pins.iter_mut().enumerate() {
+                    if j == index || (p.tangent && p.at == pin.at) {
+                        p.position += shift;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Forces the pins exert on member 0's rod after the last step, `(k, 3)`, N (a
+    /// scene: one per `[[pins]]` entry, as the JSON's `pin_forces`).
+    #[getter]
+    fn pin_forces<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
+        let forces = match &self.driver {
+            Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
+            Driver::Code { sim, .. } => sim.integrator.pin_forces(),
+        };
+        points_array(py, &forces)
+    }
+
+    /// Material points at coordinates `s` (m, a number or a 1-D array) of `member`:
+    /// `(3,)` for a number, `(k, 3)` for an array.
+    #[pyo3(signature = (s, member = 0))]
+    fn positions<'py>(&self, s: &Bound<'py, PyAny>, member: usize) -> PyResult<Bound<'py, PyAny>> {
+        let py = s.py();
+        let (values, scalar) = values_from(s, "s")?;
+        let points = points_at(py, self.member(py, member)?, &values)?;
+        let array = points_array(py, &points);
+        match scalar {
+            true => array.get_item(0),
+            false => Ok(array.into_any()),
+        }
+    }
+
+    /// Axial tension (N) at coordinates `s` (m, 1-D) of `member`.
+    #[pyo3(signature = (s, member = 0))]
+    fn tension<'py>(
+        &self,
+        s: &Bound<'py, PyAny>,
+        member: usize,
+    ) -> PyResult<Bound<'py, PyArray1<Real>>> {
+        let py = s.py();
+        let (values, _) = values_from(s, "s")?;
+        let sim = self.member(py, member)?;
+        points_at(py, sim, &values)?;
+        Ok(values_array(py, sim.system.tension(&values)))
+    }
+
+    /// Energies of `member`, J: `kinetic` and one entry per energy term.
+    #[pyo3(signature = (member = 0))]
+    fn energies<'py>(&self, py: Python<'py>, member: usize) -> PyResult<Bound<'py, PyDict>> {
+        let sim = self.member(py, member)?;
+        let dict = PyDict::new(py);
+        dict.set_item("kinetic", sim.system.rod.kinetic_energy())?;
+        for (name, value) in sim.system.energy_breakdown() {
+            dict.set_item(name, value)?;
+        }
+        Ok(dict)
+    }
+
+    /// Material points at `s` (m) of every member, `(members, k, 3)`.
+    fn stacked_positions<'py>(
+        &self,
+        s: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<Real>>> {
+        let py = s.py();
+        let (values, _) = values_from(s, "s")?;
+        let sims = self.driver.sims();
+        let all = sims.iter().map(|sim| points_at(py, sim, &values));
+        Ok(stacked_points(py, &all.collect::<PyResult<Vec<_>>>()?))
+    }
+
+    /// Control points of every member, `(members, n, 3)`; `ValueError` when members
+    /// differ in size (adaptivity).
+    fn stacked_control_points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<Real>>> {
+        let sims = self.driver.sims();
+        let all: Vec<_> = sims
+            .iter()
+            .map(|s| s.system.rod.positions.clone())
+            .collect();
+        if all.iter().any(|p| p.len() != all[0].len()) {
+            let message = "the members have different numbers of control points (adaptivity); read them one by one with member_control_points(i)";
+            return Err(pyo3::exceptions::PyValueError::new_err(message));
+        }
+        Ok(stacked_points(py, &all))
+    }
+
+    /// Control points of `member`, `(n, 3)`, m.
+    fn member_control_points<'py>(
+        &self,
+        py: Python<'py>,
+        member: usize,
+    ) -> PyResult<Bound<'py, PyArray2<Real>>> {
+        Ok(points_array(
+            py,
+            &self.member(py, member)?.system.rod.positions,
+        ))
+    }
+
+    /// Energies of every member: a dict of arrays of length `members`, J.
+    fn stacked_energies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        let sims = self.driver.sims();
+        let kinetic = sims.iter().map(|s| s.system.rod.kinetic_energy()).collect();
+        dict.set_item("kinetic", values_array(py, kinetic))?;
+        let breakdowns: Vec<_> = sims.iter().map(|s| s.system.energy_breakdown()).collect();
+        for (k, (name, _)) in breakdowns[0].iter().enumerate() {
+            let values = breakdowns
+                .iter()
+                .map(|b| b.get(k).map_or(Real::NAN, |e| e.1));
+            dict.set_item(name, values_array(py, values.collect()))?;
+        }
+        Ok(dict)
+    }
+
+    /// The JSON `splinerod run --json` writes, had the run ended now (scenes only).
+    fn to_json(&self, py: Python<'_>) -> PyResult<String> {
+        let Driver::Scene(run) = &self.driver else {
+            let message =
+                "to_json reports a scene's run: build the simulation with Scene(...).simulation()";
+            return Err(SplinerodError::new_err(message));
+        };
+        let result = run.result().py_err(py)?;
+        serde_json::to_string_pretty(&result).map_err(|e| SplinerodError::new_err(e.to_string()))
+    }
+
+    /// `to_json()` as a dict.
+    fn result<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = self.to_json(py)?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
+    /// Panics inside the guarded region, to test that a panic surfaces as an exception.
+    fn _panic_for_tests(&mut self) -> PyResult<()> {
+        guard(&mut self.poisoned, || {
+            panic!("deliberate panic for the test suite")
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        let sim = &self.driver.sims()[0];
+        format!(
+            "Simulation(members={}, time={}, steps={}, control_points={})",
+            self.driver.sims().len(),
+            sim.time,
+            sim.steps,
+            sim.system.rod.len()
+        )
+    }
+}
+
+/// Material points of `sim` at `s` (m); `SceneError` naming `s` outside the rod.
+fn points_at(
+    py: Python<'_>,
+    sim: &splinerod::Simulation,
+    s: &[Real],
+) -> PyResult<Vec<Vector3<Real>>> {
+    let rod = &sim.system.rod;
+    s.iter()
+        .map(|&x| {
+            rod.point(x)
+                .map_err(|e| scene_error(py, Some("s"), e.to_string()))
+        })
+        .collect()
+}

@@ -1,0 +1,433 @@
+//! Energies, integrators and the `RodSystem` for rods built in code.
+//!
+//! An energy or integrator object holds its parameters; the Rust object is made when a
+//! `Simulation` is built (an energy may need the rod: the inextensible rod's constraint
+//! space, a rest shape), so the same Python object can serve many simulations.
+
+use crate::arrays::vector_from;
+use crate::errors::{scene_error, IntoPyResult};
+use crate::model::{Pin, Rod};
+use nalgebra::Vector3;
+use pyo3::prelude::*;
+use splinerod::{Energy as RustEnergy, Integrator as RustIntegrator, Real};
+
+/// What an energy object makes.
+#[derive(Clone, Debug)]
+pub enum EnergySpec {
+    /// Green–Lagrange stretching.
+    Stretching {
+        /// EA, N; `None`: inextensible.
+        stiffness: Option<Real>,
+        /// Strain formulation.
+        formulation: splinerod::StretchFormulation,
+        /// At rest in the rod's initial shape instead of arclength.
+        rest_initial: bool,
+    },
+    /// Bending, EI (N·m²).
+    Bending(Real),
+    /// Gravity, m/s².
+    Gravity(Vector3<Real>),
+    /// A spring pulling material point `at` (m) to `target`.
+    PointSpring(Real, Vector3<Real>, Real),
+    /// A force on material point `at` (m).
+    PointForce(Real, Vector3<Real>),
+    /// A clamp's penalty at `at` along `direction`.
+    Clamp(Real, Vector3<Real>, Real),
+}
+
+impl EnergySpec {
+    /// The Rust energy for `rod`.
+    fn build(
+        &self,
+        rod: &splinerod::Rod,
+    ) -> Result<Box<dyn RustEnergy>, splinerod::core::CoreError> {
+        use splinerod::energies as e;
+        Ok(match *self {
+            Self::Stretching {
+                stiffness: None, ..
+            } => Box::new(e::Stretching::inextensible(rod)),
+            Self::Stretching {
+                stiffness: Some(k),
+                formulation,
+                rest_initial,
+            } => {
+                let mut s = match rest_initial {
+                    true => e::Stretching::with_rest_shape(k, rod)?,
+                    false => e::Stretching::new(k)?,
+                };
+                s.formulation = formulation;
+                Box::new(s)
+            }
+            Self::Bending(k) => Box::new(e::Bending::new(k)?),
+            Self::Gravity(g) => Box::new(e::Gravity::new(g)?),
+            Self::PointSpring(at, target, k) => Box::new(e::PointSpring::new(at, target, k)?),
+            Self::PointForce(at, force) => Box::new(e::PointForce::new(at, force)?),
+            Self::Clamp(at, direction, k) => Box::new(e::Clamp::new(at, direction, k)?),
+        })
+    }
+}
+
+/// An energy term of a rod built in code (base class of `Stretching`, `Bending`, ...).
+#[pyclass(module = "splinerod", subclass, frozen)]
+pub struct Energy {
+    spec: EnergySpec,
+}
+
+#[pymethods]
+impl Energy {
+    fn __repr__(&self) -> String {
+        format!("{:?}", self.spec)
+    }
+}
+
+/// Makes the Python class `$name` for an energy spec.
+macro_rules! energy_class {
+    ($(#[$doc:meta])* $name:ident) => {
+        $(#[$doc])*
+        #[pyclass(module = "splinerod", extends = Energy, frozen)]
+        pub struct $name;
+    };
+}
+
+energy_class!(
+    /// Green–Lagrange stretching, EA in N (`Stretching.inextensible()`: an exactly
+    /// inextensible rod). `formulation`: "mixed" (default), "mixed-consistent",
+    /// "pointwise"; `rest="initial"`: at rest in the rod's initial shape.
+    Stretching
+);
+energy_class!(
+    /// Bending, EI in N·m².
+    Bending
+);
+energy_class!(
+    /// Gravity, acceleration in m/s² (default (0, -9.81, 0)).
+    Gravity
+);
+energy_class!(
+    /// A spring of `stiffness` (N/m) pulling material point `at` (m) to `target`.
+    PointSpring
+);
+energy_class!(
+    /// A constant force (N) on material point `at` (m).
+    PointForce
+);
+energy_class!(
+    /// A clamp's penalty holding the tangent at `at` (m) along `direction`.
+    Clamp
+);
+
+/// The class and base for `spec`.
+fn energy(spec: EnergySpec) -> PyClassInitializer<Energy> {
+    PyClassInitializer::from(Energy { spec })
+}
+
+/// `SceneError` naming `field` unless `v` is finite and positive.
+fn positive(py: Python<'_>, field: &str, v: Real) -> PyResult<Real> {
+    match v.is_finite() && v > 0.0 {
+        true => Ok(v),
+        false => Err(scene_error(
+            py,
+            Some(field),
+            format!("`{field}` = {v}: must be finite and positive"),
+        )),
+    }
+}
+
+#[pymethods]
+impl Stretching {
+    #[new]
+    #[pyo3(signature = (stiffness, formulation = "mixed", rest = "arclength"))]
+    fn new(
+        py: Python<'_>,
+        stiffness: Real,
+        formulation: &str,
+        rest: &str,
+    ) -> PyResult<PyClassInitializer<Self>> {
+        use splinerod::StretchFormulation as F;
+        let formulation = match formulation {
+            "mixed" => F::Mixed,
+            "mixed-consistent" => F::MixedConsistent,
+            "pointwise" => F::Pointwise,
+            other => {
+                let message = format!("`formulation` = {other:?}: expected \"mixed\", \"mixed-consistent\" or \"pointwise\"");
+                return Err(scene_error(py, Some("formulation"), message));
+            }
+        };
+        let rest_initial = match rest {
+            "arclength" => false,
+            "initial" => true,
+            other => {
+                let message = format!("`rest` = {other:?}: expected \"arclength\" or \"initial\"");
+                return Err(scene_error(py, Some("rest"), message));
+            }
+        };
+        let stiffness = Some(positive(py, "stiffness", stiffness)?);
+        let spec = EnergySpec::Stretching {
+            stiffness,
+            formulation,
+            rest_initial,
+        };
+        Ok(energy(spec).add_subclass(Self))
+    }
+
+    /// An exactly inextensible rod (mixed constraints held by an augmented Lagrangian).
+    #[staticmethod]
+    fn inextensible(py: Python<'_>) -> PyResult<Py<Self>> {
+        let spec = EnergySpec::Stretching {
+            stiffness: None,
+            formulation: splinerod::StretchFormulation::Mixed,
+            rest_initial: false,
+        };
+        Py::new(py, energy(spec).add_subclass(Self))
+    }
+}
+
+#[pymethods]
+impl Bending {
+    #[new]
+    fn new(py: Python<'_>, stiffness: Real) -> PyResult<PyClassInitializer<Self>> {
+        let k = positive(py, "stiffness", stiffness)?;
+        Ok(energy(EnergySpec::Bending(k)).add_subclass(Self))
+    }
+}
+
+#[pymethods]
+impl Gravity {
+    #[new]
+    #[pyo3(signature = (g = None))]
+    fn new(g: Option<&Bound<'_, PyAny>>) -> PyResult<PyClassInitializer<Self>> {
+        let g = match g {
+            Some(g) => vector_from(g, "g")?,
+            None => Vector3::new(0.0, -9.81, 0.0),
+        };
+        Ok(energy(EnergySpec::Gravity(g)).add_subclass(Self))
+    }
+}
+
+#[pymethods]
+impl PointSpring {
+    #[new]
+    fn new(
+        at: Real,
+        target: &Bound<'_, PyAny>,
+        stiffness: Real,
+    ) -> PyResult<PyClassInitializer<Self>> {
+        let py = target.py();
+        let at = crate::arrays::finite(py, "at", at)?;
+        let target = vector_from(target, "target")?;
+        let k = positive(py, "stiffness", stiffness)?;
+        Ok(energy(EnergySpec::PointSpring(at, target, k)).add_subclass(Self))
+    }
+}
+
+#[pymethods]
+impl PointForce {
+    #[new]
+    fn new(at: Real, force: &Bound<'_, PyAny>) -> PyResult<PyClassInitializer<Self>> {
+        let at = crate::arrays::finite(force.py(), "at", at)?;
+        let force = vector_from(force, "force")?;
+        Ok(energy(EnergySpec::PointForce(at, force)).add_subclass(Self))
+    }
+}
+
+#[pymethods]
+impl Clamp {
+    #[new]
+    fn new(
+        at: Real,
+        direction: &Bound<'_, PyAny>,
+        stiffness: Real,
+    ) -> PyResult<PyClassInitializer<Self>> {
+        let py = direction.py();
+        let at = crate::arrays::finite(py, "at", at)?;
+        let direction = vector_from(direction, "direction")?;
+        let k = positive(py, "stiffness", stiffness)?;
+        Ok(energy(EnergySpec::Clamp(at, direction, k)).add_subclass(Self))
+    }
+}
+
+/// A rod, its energies and pins: what a `Simulation` built in code advances.
+#[pyclass(module = "splinerod")]
+pub struct RodSystem {
+    rod: splinerod::Rod,
+    energies: Vec<EnergySpec>,
+    pins: Vec<splinerod::Pin>,
+}
+
+#[pymethods]
+impl RodSystem {
+    /// A system of a copy of `rod` with `energies` and `pins`.
+    #[new]
+    #[pyo3(signature = (rod, energies = Vec::new(), pins = Vec::new()))]
+    fn new(rod: &Rod, energies: Vec<PyRef<'_, Energy>>, pins: Vec<PyRef<'_, Pin>>) -> Self {
+        Self {
+            rod: rod.inner.clone(),
+            energies: energies.iter().map(|e| e.spec.clone()).collect(),
+            pins: pins.iter().map(|p| p.inner).collect(),
+        }
+    }
+
+    /// Adds an energy.
+    fn add_energy(&mut self, energy: PyRef<'_, Energy>) {
+        self.energies.push(energy.spec.clone());
+    }
+
+    /// Adds a pin.
+    fn add_pin(&mut self, pin: PyRef<'_, Pin>) {
+        self.pins.push(pin.inner);
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "RodSystem(control_points={}, energies={}, pins={})",
+            self.rod.len(),
+            self.energies.len(),
+            self.pins.len()
+        )
+    }
+}
+
+impl RodSystem {
+    /// The Rust system (energies made for its rod).
+    pub fn build(&self, py: Python<'_>) -> PyResult<splinerod::RodSystem> {
+        let mut system = splinerod::RodSystem::new(self.rod.clone());
+        for spec in &self.energies {
+            system.energies.push(spec.build(&self.rod).py_err(py)?);
+        }
+        system.pins.clone_from(&self.pins);
+        Ok(system)
+    }
+}
+
+/// Which integrator, with its Newton settings.
+#[derive(Clone, Copy, Debug)]
+enum Method {
+    ImplicitEuler,
+    ImplicitMidpoint,
+    Bdf2,
+    Static,
+}
+
+/// A time integrator or the static solver (base class of `ImplicitEuler`, ...).
+#[pyclass(module = "splinerod", subclass, frozen)]
+pub struct Integrator {
+    method: Method,
+    max_iterations: usize,
+    tolerance: Real,
+    line_search: bool,
+}
+
+impl Integrator {
+    /// The Rust integrator.
+    pub fn build(&self, py: Python<'_>) -> PyResult<Box<dyn RustIntegrator>> {
+        use splinerod::integrators as i;
+        let newton = splinerod::NewtonParams {
+            max_iterations: self.max_iterations,
+            tolerance: self.tolerance,
+            line_search: self.line_search,
+            ..Default::default()
+        };
+        let statics = splinerod::StaticParams {
+            max_iterations: self.max_iterations,
+            tolerance: self.tolerance,
+            ..Default::default()
+        };
+        let built: Result<Box<dyn RustIntegrator>, i::IntegratorError> = match self.method {
+            Method::ImplicitEuler => i::ImplicitEuler::new(newton).map(|x| Box::new(x) as _),
+            Method::ImplicitMidpoint => i::ImplicitMidpoint::new(newton).map(|x| Box::new(x) as _),
+            Method::Bdf2 => i::Bdf2::new(newton).map(|x| Box::new(x) as _),
+            Method::Static => i::StaticSolver::new(statics).map(|x| Box::new(x) as _),
+        };
+        built.map_err(|e| scene_error(py, None, e.to_string()))
+    }
+
+    /// The implicit Euler integrator with default settings.
+    pub fn default_euler() -> Self {
+        let d = splinerod::NewtonParams::default();
+        Self {
+            method: Method::ImplicitEuler,
+            max_iterations: d.max_iterations,
+            tolerance: d.tolerance,
+            line_search: d.line_search,
+        }
+    }
+}
+
+#[pymethods]
+impl Integrator {
+    fn __repr__(&self) -> String {
+        format!(
+            "{:?}(max_iterations={}, tolerance={:e})",
+            self.method, self.max_iterations, self.tolerance
+        )
+    }
+}
+
+/// Makes the Python class `$name` for integrator `$method`.
+macro_rules! integrator_class {
+    ($(#[$doc:meta])* $name:ident, $method:expr, $defaults:expr) => {
+        $(#[$doc])*
+        #[pyclass(module = "splinerod", extends = Integrator, frozen)]
+        pub struct $name;
+
+        #[pymethods]
+        impl $name {
+            #[new]
+            #[pyo3(signature = (max_iterations = None, tolerance = None, line_search = None))]
+            fn new(
+                py: Python<'_>,
+                max_iterations: Option<usize>,
+                tolerance: Option<Real>,
+                line_search: Option<bool>,
+            ) -> PyResult<PyClassInitializer<Self>> {
+                let (iterations, tol, search) = $defaults;
+                let tolerance = positive(py, "tolerance", tolerance.unwrap_or(tol))?;
+                let integrator = Integrator {
+                    method: $method,
+                    max_iterations: max_iterations.unwrap_or(iterations),
+                    tolerance,
+                    line_search: line_search.unwrap_or(search),
+                };
+                integrator.build(py)?;
+                Ok(PyClassInitializer::from(integrator).add_subclass(Self))
+            }
+        }
+    };
+}
+
+/// Newton defaults of the time integrators.
+fn newton_defaults() -> (usize, Real, bool) {
+    let d = splinerod::NewtonParams::default();
+    (d.max_iterations, d.tolerance, d.line_search)
+}
+
+/// Newton defaults of the static solver.
+fn static_defaults() -> (usize, Real, bool) {
+    let d = splinerod::StaticParams::default();
+    (d.max_iterations, d.tolerance, true)
+}
+
+integrator_class!(
+    /// Implicit (backward) Euler: L-stable, first order, damps high frequencies.
+    ImplicitEuler,
+    Method::ImplicitEuler,
+    newton_defaults()
+);
+integrator_class!(
+    /// The implicit midpoint rule: second order, conserves energy (no numerical damping).
+    ImplicitMidpoint,
+    Method::ImplicitMidpoint,
+    newton_defaults()
+);
+integrator_class!(
+    /// BDF2: second order, L-stable.
+    Bdf2,
+    Method::Bdf2,
+    newton_defaults()
+);
+integrator_class!(
+    /// The static solver: the equilibrium (one `step` solves it).
+    StaticSolver,
+    Method::Static,
+    static_defaults()
+);
