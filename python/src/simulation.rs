@@ -265,9 +265,14 @@ impl Simulation {
         member: Option<usize>,
     ) -> PyResult<()> {
         let py = velocities.py();
-        for i in self.selected(py, member)? {
+        let members = self.selected(py, member)?;
+        // Every member's array checked before any is set: all or nothing.
+        let checked = members.clone().map(|i| {
             let n = self.driver.sims()[i].system.rod.len();
-            let v = points_from(velocities, "velocities", Some(n))?;
+            points_from(velocities, "velocities", Some(n))
+        });
+        let checked = checked.collect::<PyResult<Vec<_>>>()?;
+        for (i, v) in members.zip(checked) {
             if let Some(sim) = self.driver.sim_mut(i) {
                 sim.system.rod.velocities = v;
             }
