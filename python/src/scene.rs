@@ -77,8 +77,15 @@ impl Scene {
         self.scene.ensemble.as_ref().map_or(1, |e| e.count)
     }
 
-    /// A new simulation of this scene at its start.
-    fn simulation(&self, py: Python<'_>) -> PyResult<Simulation> {
+    /// A new simulation of this scene at its start. Like `splinerod run`, a scene whose
+    /// estimated steps, control points, samples or work pass the documented resource
+    /// limits is refused (`SceneError` naming the fields) unless `allow_large=True`.
+    #[pyo3(signature = (allow_large = false))]
+    fn simulation(&self, py: Python<'_>, allow_large: bool) -> PyResult<Simulation> {
+        if !allow_large {
+            let limits = splinerod::scene::Limits::default();
+            self.scene.check_limits(&limits).py_err(py)?;
+        }
         let run = py.detach(|| SceneRun::new(&self.scene)).py_err(py)?;
         Ok(Simulation::from_scene(run))
     }

@@ -166,3 +166,13 @@ def test_a_panic_surfaces_as_an_exception_and_poisons_the_object():
         sim._panic_for_tests()
     with pytest.raises(splinerod.SplinerodError, match="unusable"):
         sim.step()
+
+
+def test_resource_limits_as_in_the_cli():
+    table = cable()
+    table["solver"].update({"dt": 1e-6, "duration": 100.0})
+    scene = splinerod.Scene(table)
+    with pytest.raises(splinerod.SceneError) as caught:
+        scene.simulation()
+    assert "solver" in caught.value.field
+    assert scene.simulation(allow_large=True).members == 1
