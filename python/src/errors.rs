@@ -45,7 +45,11 @@ pub fn scene_error(py: Python<'_>, field: Option<&str>, message: impl Into<Strin
 
 /// The Python exception for a splinerod error.
 pub fn to_py(py: Python<'_>, error: Error) -> PyErr {
-    let message = error.to_string();
+    // The CLI's advice, in this API's words.
+    let message = error.to_string().replace(
+        "pass --allow-large to run it anyway",
+        "pass allow_large=True to Scene.simulation() to run it anyway",
+    );
     if let Some(io) = io_error(&error) {
         return PyOSError::new_err((io.raw_os_error().unwrap_or(0), message));
     }

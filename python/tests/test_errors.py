@@ -175,4 +175,5 @@ def test_resource_limits_as_in_the_cli():
     with pytest.raises(splinerod.SceneError) as caught:
         scene.simulation()
     assert "solver" in caught.value.field
+    assert "allow_large=True" in str(caught.value)
     assert scene.simulation(allow_large=True).members == 1
