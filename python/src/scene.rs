@@ -121,7 +121,11 @@ fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::Boolean(obj.extract()?));
     }
     if obj.is_instance_of::<PyInt>() {
-        return Ok(toml::Value::Integer(obj.extract()?));
+        let value = obj.extract().map_err(|_| {
+            let message = format!("`{path}` = {obj}: an integer beyond 64 bits");
+            scene_error(py, Some(path), message)
+        })?;
+        return Ok(toml::Value::Integer(value));
     }
     if obj.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(obj.extract()?));
@@ -133,7 +137,9 @@ fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         let mut table = toml::Table::new();
         for (key, value) in dict.iter() {
             let key: String = key.extract().map_err(|_| {
-                scene_error(py, Some(path), format!("`{path}`: keys must be strings"))
+                let at = if path.is_empty() { "the scene" } else { path };
+                let message = format!("key {key} in {at}: keys must be strings");
+                scene_error(py, Some(path).filter(|p| !p.is_empty()), message)
             })?;
             let inner = if path.is_empty() {
                 key.clone()

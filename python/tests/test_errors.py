@@ -3,6 +3,7 @@ state stays as it was."""
 
 import math
 import pathlib
+import sys
 
 import numpy as np
 import pytest
@@ -177,3 +178,20 @@ def test_resource_limits_as_in_the_cli():
     assert "solver" in caught.value.field
     assert "allow_large=True" in str(caught.value)
     assert scene.simulation(allow_large=True).members == 1
+
+
+def test_dict_values_beyond_toml():
+    with pytest.raises(splinerod.SceneError) as caught:
+        splinerod.Scene(cable(control_points=10**30))
+    assert caught.value.field == "rod.control_points"
+    with pytest.raises(splinerod.SceneError) as caught:
+        splinerod.Scene({1: 2})
+    assert caught.value.field is None and "keys must be strings" in str(caught.value)
+
+
+@pytest.mark.skipif(sys.version_info < (3, 11), reason="exception notes are Python 3.11+")
+def test_wrong_types_name_the_argument():
+    sim = splinerod.Scene(cable()).simulation()
+    with pytest.raises(TypeError) as caught:
+        sim.step(1.5)
+    assert "'n'" in " ".join(getattr(caught.value, "__notes__", []))
