@@ -1,6 +1,7 @@
 """The simulation API: stepping, callbacks, state and setters, ensembles, threads."""
 
 import pathlib
+import sys
 import threading
 
 import numpy as np
@@ -160,3 +161,33 @@ def test_code_built_simulation_needs_until_and_has_no_json():
 def test_docstrings_explain():
     for item in (splinerod.Simulation, splinerod.Simulation.run, splinerod.Scene.from_toml):
         assert item.__doc__ and len(item.__doc__) > 20
+
+
+def test_stepping_releases_the_gil():
+    # A Python thread counts while the main thread is inside one step call. Holding the
+    # GIL, the call would let it count nothing: the main thread does not give the GIL up
+    # between reading the count before the call and after it unless the call releases it.
+    sim = hanging_cable().simulation()
+    ticks = []
+    running = threading.Event()
+    done = threading.Event()
+
+    def count():
+        running.set()
+        while not done.is_set():
+            ticks.append(1)
+
+    interval = sys.getswitchinterval()
+    counter = threading.Thread(target=count)
+    counter.start()
+    running.wait()
+    try:
+        sys.setswitchinterval(0.2)
+        before = len(ticks)
+        sim.step(1500)
+        during = len(ticks) - before
+    finally:
+        sys.setswitchinterval(interval)
+        done.set()
+        counter.join()
+    assert during > 100, during
