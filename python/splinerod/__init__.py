@@ -17,6 +17,7 @@ integrators, ``RodSystem``, ``Simulation``). Bad input raises ``SceneError`` (a
 """
 
 from ._splinerod import (
+    Adaptivity,
     Bdf2,
     Bending,
     BSplineSpace,
@@ -42,6 +43,7 @@ from ._splinerod import (
 )
 
 __all__ = [
+    "Adaptivity",
     "Bdf2",
     "Bending",
     "BSplineSpace",

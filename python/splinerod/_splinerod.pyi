@@ -7,7 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__ = ['SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver']
+__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver']
 
 _ArrayLike = npt.ArrayLike
 _Points = npt.NDArray[np.float64]
@@ -45,6 +45,8 @@ class Simulation:
         system: "RodSystem",
         integrator: Optional["Integrator"] = None,
         dt: Optional[float] = None,
+        adaptivity: Optional[Adaptivity] = None,
+        error_estimate: bool = False,
     ) -> "Simulation": ...
     def step(self, n: int = 1) -> None: ...
     def run(
@@ -59,6 +61,10 @@ class Simulation:
     def steps(self) -> int: ...
     @property
     def dt(self) -> float: ...
+    @property
+    def estimated_error(self) -> Optional[float]: ...
+    @property
+    def control_point_count(self) -> int: ...
     @property
     def members(self) -> int: ...
     @property
@@ -87,6 +93,14 @@ class Simulation:
     def stacked_energies(self) -> Dict[str, _Points]: ...
     def to_json(self) -> str: ...
     def result(self) -> Dict[str, Any]: ...
+
+@final
+@final
+class Adaptivity:
+    """Adaptive resolution with the fields of a scene's [adaptivity] table."""
+
+    def __new__(cls, **fields: Any) -> "Adaptivity": ...
+    def tolerance_for(self, rest_length: float) -> float: ...
 
 @final
 class Material:

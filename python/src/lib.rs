@@ -7,6 +7,7 @@
 //! `SceneError` (bad input, with the field named), `SplinerodError` (the run could not
 //! go on, or an internal panic) and `OSError` (see `errors`).
 
+mod adaptivity;
 mod arrays;
 mod errors;
 mod model;
@@ -42,5 +43,6 @@ fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<system::ImplicitMidpoint>()?;
     m.add_class::<system::Bdf2>()?;
     m.add_class::<system::StaticSolver>()?;
+    m.add_class::<adaptivity::Adaptivity>()?;
     Ok(())
 }

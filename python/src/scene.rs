@@ -101,7 +101,7 @@ impl Scene {
 
 /// A parse error of generated TOML without its line and column (they would point into
 /// text the user never saw).
-fn without_position(error: Error) -> Error {
+pub fn without_position(error: Error) -> Error {
     match error {
         Error::Parse { message, field, .. } => Error::Parse {
             file: None,
@@ -115,7 +115,7 @@ fn without_position(error: Error) -> Error {
 
 /// `obj` as a TOML value; `SceneError` naming the dotted `path` for anything TOML has
 /// no value for (None, objects).
-fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+pub fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     let py = obj.py();
     if obj.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(obj.extract()?));

@@ -7,6 +7,7 @@
 //! `velocities`, ...) describe member 0; methods take `member=`; `stacked_*` methods
 //! return one array over all members.
 
+use crate::adaptivity::Adaptivity;
 use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
 use crate::errors::{guard, scene_error, IntoPyResult, SplinerodError};
 use crate::system::{Integrator, RodSystem};
@@ -137,14 +138,18 @@ fn no_member(py: Python<'_>, index: usize, count: usize) -> PyErr {
 #[pymethods]
 impl Simulation {
     /// A simulation of `system` advanced by `integrator` (default `ImplicitEuler()`) in
-    /// steps of `dt` seconds (not needed by the static solver).
+    /// steps of `dt` seconds (not needed by the static solver); with `adaptivity`
+    /// (an `Adaptivity`), the resolution adapts after every step; `error_estimate=True`
+    /// estimates the error of a fixed resolution (`estimated_error`).
     #[new]
-    #[pyo3(signature = (system, integrator = None, dt = None))]
+    #[pyo3(signature = (system, integrator = None, dt = None, adaptivity = None, error_estimate = false))]
     fn new(
         py: Python<'_>,
         system: &RodSystem,
         integrator: Option<PyRef<'_, Integrator>>,
         dt: Option<Real>,
+        adaptivity: Option<PyRef<'_, Adaptivity>>,
+        error_estimate: bool,
     ) -> PyResult<Self> {
         let integrator = match integrator {
             Some(i) => i.build(py)?,
@@ -160,7 +165,17 @@ impl Simulation {
                 return Err(scene_error(py, Some("dt"), message));
             }
         };
-        let sim = splinerod::Simulation::new(system.build(py)?, integrator);
+        let system = system.build(py)?;
+        let (length, initial) = (system.rod.material().rest_length, system.rod.len());
+        let mut sim = splinerod::Simulation::new(system, integrator);
+        if let Some(a) = adaptivity {
+            if let Some(adapter) = a.adapter(py, length, initial)? {
+                sim = sim.with_adapter(adapter);
+            }
+        }
+        if error_estimate {
+            sim = sim.estimate_errors();
+        }
         Ok(Self {
             driver: Driver::Code {
                 sim: Box::new(sim),
@@ -231,6 +246,21 @@ impl Simulation {
             Driver::Scene(run) => run.dt(),
             Driver::Code { dt, .. } => *dt,
         }
+    }
+
+    /// Member 0's latest error estimate, m (the largest over its spans), or `None` when
+    /// no estimate is made (no tolerance-driven adaptivity, no `error_estimate`).
+    #[getter]
+    fn estimated_error(&self) -> Option<Real> {
+        let estimate = self.driver.sims()[0].error_estimate();
+        // Before the first estimate the estimator holds an empty one.
+        estimate.filter(|e| e.control_points > 0).map(|e| e.max())
+    }
+
+    /// Member 0's number of control points.
+    #[getter]
+    fn control_point_count(&self) -> usize {
+        self.driver.sims()[0].system.rod.len()
     }
 
     /// Number of members (an `[ensemble]`'s count, else 1).

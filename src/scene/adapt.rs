@@ -5,6 +5,9 @@
 use crate::scene::{finite_vec, fraction, non_negative, positive};
 use crate::Error;
 use serde::Deserialize;
+use splinerod_adaptivity::{
+    AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion, ToleranceCriterion,
+};
 
 /// `[adaptivity]`.
 #[derive(Debug, Clone, Deserialize)]
@@ -80,6 +83,56 @@ impl AdaptivitySpec {
             self.insert_threshold.unwrap_or(0.05),
             self.remove_threshold.unwrap_or(0.005),
         )
+    }
+
+    /// The adapt step this table describes for a rod of `rest_length` (m) starting with
+    /// `initial` control points: the interaction criterion and either the tolerance
+    /// criterion (default) or the paper's curvature criterion. Fields as in the scene:
+    /// `min_span` and `interaction_radius` are fractions of the rest length.
+    pub fn adapter(&self, rest_length: f64, initial: usize) -> Result<Adapter, Error> {
+        let l = rest_length;
+        let tolerance = self.tolerance_for(l);
+        let default_shape = if self.uses_curvature() {
+            1e-6
+        } else {
+            0.25 * tolerance
+        };
+        let params = AdaptParams {
+            max_control_points: self.max_control_points,
+            min_control_points: self.min_control_points.unwrap_or(initial),
+            min_span: self.min_span * l,
+            shape_tolerance: self.shape_tolerance.unwrap_or(default_shape),
+            hysteresis_steps: self.hysteresis_steps,
+            ..AdaptParams::default()
+        };
+        let interaction = InteractionCriterion::new(self.interaction_radius * l)?
+            .with_multiplicity(self.interaction_multiplicity)?;
+        let adapter = Adapter::new(params)?.with(interaction);
+        Ok(if self.uses_curvature() {
+            let (insert, remove) = self.thresholds();
+            adapter.with(CurvatureCriterion::new(insert, remove)?)
+        } else {
+            adapter.with(ToleranceCriterion::new(tolerance)?)
+        })
+    }
+
+    /// An `[adaptivity]` table from TOML text that holds it (the header and its keys), as
+    /// in a scene file: defaults filled in, errors naming `adaptivity.<field>`. Not
+    /// range-checked: see [`AdaptivitySpec::validate`].
+    pub fn from_toml(text: &str) -> Result<Self, Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Table {
+            adaptivity: AdaptivitySpec,
+        }
+        let table: Table = toml::from_str(text).map_err(|e| crate::scene::parse_error(text, &e))?;
+        Ok(table.adaptivity)
+    }
+
+    /// Range checks of the table (errors name `adaptivity.<field>`); `initial` is the
+    /// rod's initial number of control points.
+    pub fn validate(&self, initial: usize) -> Result<(), Error> {
+        validate_adaptivity(self, initial)
     }
 
     /// The error tolerance, m, for a rod of `rest_length` (default `1e-4 · rest_length`).

@@ -5,9 +5,7 @@ use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
 use crate::world::path::Path;
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
-use splinerod_adaptivity::{
-    AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion, ToleranceCriterion,
-};
+use splinerod_adaptivity::Adapter;
 use splinerod_core::{BSplineSpace, BasisSpace, Keyframes, Material, Pin, Real, Rod};
 use splinerod_energies::{
     Bending, Clamp, Frame, Gravity, StretchFormulation, Stretching, Twisting,
@@ -245,36 +243,13 @@ impl Scene {
         Ok(Some(twisting))
     }
 
-    /// The adapt step of `[adaptivity]`, if enabled: the interaction criterion and either
-    /// the tolerance criterion (default) or the paper's curvature criterion.
+    /// The adapt step of `[adaptivity]`, if enabled ([`AdaptivitySpec::adapter`]).
     pub fn adapter(&self) -> Result<Option<Adapter>, Error> {
         let Some(a) = self.adaptivity.as_ref().filter(|a| a.enabled) else {
             return Ok(None);
         };
-        let l = self.rod.rest_length;
-        let tolerance = a.tolerance_for(l);
-        let default_shape = if a.uses_curvature() {
-            1e-6
-        } else {
-            0.25 * tolerance
-        };
-        let params = AdaptParams {
-            max_control_points: a.max_control_points,
-            min_control_points: a.min_control_points.unwrap_or(self.total_control_points()),
-            min_span: a.min_span * l,
-            shape_tolerance: a.shape_tolerance.unwrap_or(default_shape),
-            hysteresis_steps: a.hysteresis_steps,
-            ..AdaptParams::default()
-        };
-        let interaction = InteractionCriterion::new(a.interaction_radius * l)?
-            .with_multiplicity(a.interaction_multiplicity)?;
-        let adapter = Adapter::new(params)?.with(interaction);
-        Ok(Some(if a.uses_curvature() {
-            let (insert, remove) = a.thresholds();
-            adapter.with(CurvatureCriterion::new(insert, remove)?)
-        } else {
-            adapter.with(ToleranceCriterion::new(tolerance)?)
-        }))
+        let initial = self.total_control_points();
+        a.adapter(self.rod.rest_length, initial).map(Some)
     }
 
     /// Newton settings of `[solver]` for time stepping.

@@ -456,7 +456,7 @@ impl Scene {
 
 /// One line from a TOML error: `line L, column C: message`, with a missing or unknown field
 /// named by its dotted path (`rod.rest_length`) and any other error followed by its path.
-fn parse_error(text: &str, e: &toml::de::Error) -> Error {
+pub(crate) fn parse_error(text: &str, e: &toml::de::Error) -> Error {
     // Without the input, the error's Display ends with "in `a.b`" naming the enclosing keys.
     let mut bare = e.clone();
     bare.set_input(None);
