@@ -9,6 +9,7 @@
 
 mod adaptivity;
 mod arrays;
+mod driver;
 mod errors;
 mod model;
 mod scene;

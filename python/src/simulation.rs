@@ -9,58 +9,14 @@
 
 use crate::adaptivity::Adaptivity;
 use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
+use crate::driver::Driver;
 use crate::errors::{guard, scene_error, IntoPyResult, SplinerodError};
 use crate::system::{Integrator, RodSystem};
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
-use splinerod::{Error, Real, SceneRun};
-
-/// What advances: a scene's run, or one simulation built in code with its step.
-enum Driver {
-    Scene(Box<SceneRun>),
-    Code {
-        sim: Box<splinerod::Simulation>,
-        dt: Real,
-    },
-}
-
-impl Driver {
-    /// Makes `n` steps (static: solves).
-    fn advance(&mut self, n: usize) -> Result<(), Error> {
-        match self {
-            Self::Scene(run) => run.advance(n),
-            Self::Code { sim, dt } => {
-                for _ in 0..n {
-                    match sim.integrator.solves_equilibrium() {
-                        true => sim.settle()?,
-                        false => sim.step(*dt)?,
-                    };
-                }
-                Ok(())
-            }
-        }
-    }
-
-    fn sims(&self) -> &[splinerod::Simulation] {
-        match self {
-            Self::Scene(run) => run.members(),
-            Self::Code { sim, .. } => std::slice::from_ref(sim),
-        }
-    }
-
-    fn sim_mut(&mut self, index: usize) -> Option<&mut splinerod::Simulation> {
-        match self {
-            Self::Scene(run) => run.member_mut(index),
-            Self::Code { sim, .. } => (index == 0).then_some(sim.as_mut()),
-        }
-    }
-
-    fn is_static(&self) -> bool {
-        self.sims()[0].integrator.solves_equilibrium()
-    }
-}
+use splinerod::{Real, SceneRun};
 
 /// A simulation: `Scene.simulation()` or `Simulation(system, integrator, dt)`.
 #[pyclass(module = "splinerod")]

@@ -18,7 +18,7 @@
 //! atomic: a temporary file is written, flushed to disk (`fsync`) and renamed over the
 //! previous checkpoint, so a crash while writing leaves the previous one intact.
 
-use crate::run::main_loop::Tally;
+use crate::run::tally::Tally;
 use crate::world::saved::SimulationState;
 use crate::Error;
 use serde::{Deserialize, Serialize};

@@ -17,156 +17,18 @@
 
 use crate::run::checkpoint::{Checkpoint, CheckpointPlan, MemberState};
 use crate::run::ensemble::summarize;
-use crate::run::knot_track::KnotTrack;
 use crate::run::observe::Observer;
-use crate::run::runner::{finish, frame, notify_finish, probes_at_start, ContactStats, Probe};
-use crate::run::runner::{RunControl, RunResult, SolverTotals};
+use crate::run::runner::{finish, frame, notify_finish, RunControl, RunResult, SolverTotals};
+use crate::run::tally::{CutSchedule, Tally};
 use crate::scene::{Method, Scene};
-use crate::world::estimate::EstimateOutput;
 use crate::world::saved::SimulationState;
-use crate::{Ensemble, Error, RodSystem, Simulation, StageTimes, StepReport};
+use crate::{Ensemble, Error, Simulation};
 use splinerod_core::Real;
-use splinerod_energies::EnergySummary;
 use std::ops::Range;
 use std::time::Instant;
 
 /// Step times reserved up front (more grow the vector as the run goes).
 const STEP_TIMES_RESERVED: usize = 1 << 16;
-
-/// What a member accumulated besides its final state.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub(crate) struct Tally {
-    pub(crate) solver: SolverTotals,
-    pub(crate) probes: Vec<Probe>,
-    pub(crate) history: Vec<[Real; 2]>,
-    pub(crate) contact: Option<ContactStats>,
-    pub(crate) knot: Option<KnotTrack>,
-    pub(crate) estimates: Option<EstimateOutput>,
-    /// Wall time of each stage, summed over the run.
-    pub(crate) stages: StageTimes,
-    cuts: CutSchedule,
-}
-
-impl Tally {
-    /// The tally of a member of `scene` at its start (its energies' summary included).
-    fn new(scene: &Scene, system: &RodSystem) -> Result<Self, Error> {
-        let mut tally = Self {
-            solver: SolverTotals::default(),
-            probes: probes_at_start(scene, system)?,
-            history: vec![[0.0, system.rod.len() as Real]],
-            contact: None,
-            knot: None,
-            estimates: None,
-            stages: StageTimes::default(),
-            cuts: CutSchedule::new(scene),
-        };
-        tally.summary(&system.summary()?);
-        if scene.rod.overhand.is_some() {
-            let mut track = KnotTrack::default();
-            track.record(system, 0.0, true)?;
-            tally.knot = Some(track);
-        }
-        Ok(tally)
-    }
-
-    /// Folds in the energies' summary of one state.
-    fn summary(&mut self, summary: &EnergySummary) {
-        if let Some(c) = &summary.contact {
-            self.contact.get_or_insert_default().add(c);
-        }
-    }
-
-    /// Records one stage's report and the state after it; makes the cuts now due.
-    /// Returns the wall time it took.
-    fn record(
-        &mut self,
-        scene: &Scene,
-        sim: &mut Simulation,
-        report: &StepReport,
-        dt: Real,
-    ) -> Result<Real, Error> {
-        let start = Instant::now();
-        self.solver.add(report, dt > 0.0);
-        self.summary(&report.energies);
-        if let (Some(error), Some(e)) = (report.error_estimate, sim.error_estimate()) {
-            let changed = report.adapt.inserted + report.adapt.removed > 0;
-            let out = self.estimates.get_or_insert_default();
-            out.record(sim.time, e.control_points, error, changed);
-        }
-        if let Some(track) = &mut self.knot {
-            track.record(&sim.system, sim.time, false)?;
-        }
-        let time = sim.time;
-        self.cuts.apply(time, dt, |s| sim.cut(s))?;
-        self.count(sim.time, sim.system.rod.len());
-        self.probe(scene, &sim.system, sim.time)?;
-        Ok(start.elapsed().as_secs_f64())
-    }
-
-    /// The final estimate and knot record of a member at the end of its run.
-    fn close(&mut self, sim: &mut Simulation) -> Result<(), Error> {
-        if let Some(e) = sim.estimate_now()? {
-            let (n, error) = (e.control_points, e.max());
-            let out = self.estimates.get_or_insert_default();
-            out.record(sim.time, n, error, true);
-        }
-        if let Some(track) = &mut self.knot {
-            track.record(&sim.system, sim.time, true)?;
-        }
-        Ok(())
-    }
-
-    /// Appends the probed material points of `system` at time `t`.
-    fn probe(&mut self, scene: &Scene, system: &RodSystem, t: Real) -> Result<(), Error> {
-        for probe in &mut self.probes {
-            probe.t.push(t);
-            let p = system.rod.point(scene.material_coordinate(probe.s))?;
-            probe.positions.push(p.into());
-        }
-        Ok(())
-    }
-
-    /// Records the control-point count at time `t` if it changed.
-    fn count(&mut self, t: Real, n: usize) {
-        if self.history.last().is_some_and(|h| h[1] != n as Real) {
-            self.history.push([t, n as Real]);
-        }
-    }
-}
-
-/// The scene's cuts in time order, applied once each.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct CutSchedule {
-    cuts: Vec<(Real, Real)>,
-    next: usize,
-}
-
-impl CutSchedule {
-    /// The cuts of `scene` (material coordinates in m), sorted by time.
-    fn new(scene: &Scene) -> Self {
-        let mut cuts: Vec<_> = scene
-            .cuts
-            .iter()
-            .map(|c| (c.time, scene.entry_coordinate(c.rod.as_deref(), c.at)))
-            .collect();
-        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { cuts, next: 0 }
-    }
-
-    /// Calls `cut` for every cut due by `time` (a step of `dt` just ended) not yet made.
-    fn apply(
-        &mut self,
-        time: Real,
-        dt: Real,
-        mut cut: impl FnMut(Real) -> Result<(), Error>,
-    ) -> Result<(), Error> {
-        while self.next < self.cuts.len() && self.cuts[self.next].0 <= time + 1e-9 * dt {
-            cut(self.cuts[self.next].1)?;
-            self.next += 1;
-        }
-        Ok(())
-    }
-}
 
 /// One member of a run.
 pub(crate) struct Member {

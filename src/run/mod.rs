@@ -13,4 +13,5 @@ pub mod runner;
 pub mod session;
 pub mod shard;
 pub(crate) mod summary;
+pub(crate) mod tally;
 pub(crate) mod twist;

@@ -3,9 +3,9 @@
 
 use crate::run::ensemble::MemberSummary;
 use crate::run::knot_track::KnotTrack;
-use crate::run::main_loop::Tally;
 use crate::run::observe::{Frame, Observer};
 use crate::run::shard::{Shard, ShardInfo};
+use crate::run::tally::Tally;
 use crate::scene::Scene;
 use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};

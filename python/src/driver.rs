@@ -1,0 +1,55 @@
+//! What a Python `Simulation` advances: a scene's run or a simulation built in code.
+
+use splinerod::{Error, Real, SceneRun};
+
+/// What advances: a scene's run, or one simulation built in code with its step.
+pub enum Driver {
+    /// A scene's run (every member).
+    Scene(Box<SceneRun>),
+    /// A simulation built in code, stepped by `dt`.
+    Code {
+        /// The simulation.
+        sim: Box<splinerod::Simulation>,
+        /// Its time step, s (0 for the static solver).
+        dt: Real,
+    },
+}
+
+impl Driver {
+    /// Makes `n` steps (static: solves).
+    pub fn advance(&mut self, n: usize) -> Result<(), Error> {
+        match self {
+            Self::Scene(run) => run.advance(n),
+            Self::Code { sim, dt } => {
+                for _ in 0..n {
+                    match sim.integrator.solves_equilibrium() {
+                        true => sim.settle()?,
+                        false => sim.step(*dt)?,
+                    };
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The simulations: a scene's members, or the one built in code.
+    pub fn sims(&self) -> &[splinerod::Simulation] {
+        match self {
+            Self::Scene(run) => run.members(),
+            Self::Code { sim, .. } => std::slice::from_ref(sim),
+        }
+    }
+
+    /// Member `index`, to change its state; `None` past the last.
+    pub fn sim_mut(&mut self, index: usize) -> Option<&mut splinerod::Simulation> {
+        match self {
+            Self::Scene(run) => run.member_mut(index),
+            Self::Code { sim, .. } => (index == 0).then_some(sim.as_mut()),
+        }
+    }
+
+    /// Whether the integrator solves for equilibrium (the static solver).
+    pub fn is_static(&self) -> bool {
+        self.sims()[0].integrator.solves_equilibrium()
+    }
+}
