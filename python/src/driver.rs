@@ -12,6 +12,8 @@ pub enum Driver {
         sim: Box<splinerod::Simulation>,
         /// Its time step, s (0 for the static solver).
         dt: Real,
+        /// Calls made (steps, or solves of the static solver, whose `steps` stay 0).
+        calls: usize,
     },
 }
 
@@ -20,8 +22,9 @@ impl Driver {
     pub fn advance(&mut self, n: usize) -> Result<(), Error> {
         match self {
             Self::Scene(run) => run.advance(n),
-            Self::Code { sim, dt } => {
+            Self::Code { sim, dt, calls } => {
                 for _ in 0..n {
+                    *calls += 1;
                     match sim.integrator.solves_equilibrium() {
                         true => sim.settle()?,
                         false => sim.step(*dt)?,

@@ -57,7 +57,7 @@ impl Simulation {
     fn steps_until(&self, py: Python<'_>, until: Option<Real>) -> PyResult<usize> {
         let (done, scheduled, dt) = match &self.driver {
             Driver::Scene(run) => (run.stages_done(), Some(run.stage_count()), run.dt()),
-            Driver::Code { sim, dt } => (sim.steps, None, *dt),
+            Driver::Code { dt, calls, .. } => (*calls, None, *dt),
         };
         if self.driver.is_static() {
             return Ok(usize::from(done == 0));
@@ -136,6 +136,7 @@ impl Simulation {
             driver: Driver::Code {
                 sim: Box::new(sim),
                 dt,
+                calls: 0,
             },
             poisoned: false,
         })

@@ -191,3 +191,16 @@ def test_stepping_releases_the_gil():
         done.set()
         counter.join()
     assert during > 100, during
+
+
+def test_code_built_static_solver_runs_once():
+    material = splinerod.Material(1.0, 0.1)
+    basis = splinerod.BSplineSpace.clamped_uniform(3, 8, 1.0)
+    rod = splinerod.Rod.straight(material, basis, [0, 0, 0], [0.8, 0, 0])
+    pins = [splinerod.Pin.here(rod, 0.0), splinerod.Pin.here(rod, 1.0)]
+    system = splinerod.RodSystem(rod, [splinerod.Stretching(100.0), splinerod.Gravity()], pins)
+    sim = splinerod.Simulation(system, splinerod.StaticSolver())
+    assert sim.run() == 1
+    assert sim.run() == 0
+    sim.step()  # an explicit solve is still made
+    assert abs(-sim.positions(0.5)[1] - 0.2687) < 1e-3
