@@ -78,6 +78,13 @@ pub trait BasisSpace: Send + Sync + fmt::Debug {
         let (t, d) = (self.knots(), self.degree());
         (t[d], t[self.count()])
     }
+    /// For a periodic space (closed curves), the number `m` of distinct coefficients:
+    /// coefficient `i + m` is a copy of coefficient `i` for every `i < count − m`, and
+    /// whoever changes coefficients must keep the copies equal. `None` (the default) for
+    /// an ordinary space.
+    fn periodic_count(&self) -> Option<usize> {
+        None
+    }
     /// Writes the non-zero functions at `s` and their first two derivatives into `out`.
     /// Fails if `s` is outside the domain or not finite.
     fn evaluate(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError>;

@@ -7,6 +7,11 @@
 //! \\(\alpha_i, 1-\alpha_i\\). Removal: `rows = d - 1`, `cols = d + 2`: the
 //! least-squares inverse of the insertion, which is exact whenever the knot is removable
 //! (paper eq. 7 for the cubic case).
+//!
+//! On a periodic space ([`crate::PeriodicBSplineSpace`]) the last `d` coefficients repeat
+//! the first `d`. A change next to the seam then also rewrites the copies of the window's
+//! rows on the other side: the map's *ties*, each a new index that takes the same
+//! combination as one window row ([`KnotMap::tied_new`]).
 
 use crate::basis::MAX_ORDER;
 use crate::Real;
@@ -44,6 +49,9 @@ pub struct KnotMap {
     weights: [[Real; MAX_COLS]; MAX_ORDER],
     /// Insertion coefficients α of the refined side (used to measure a removal's error).
     alphas: [Real; MAX_ORDER],
+    /// Periodic ties: (new index, window row) pairs; the first `tie_count` are live.
+    ties: [(usize, usize); MAX_ORDER],
+    tie_count: usize,
 }
 
 impl KnotMap {
@@ -73,6 +81,8 @@ impl KnotMap {
             cols: degree + 1,
             weights,
             alphas: *alphas,
+            ties: [(0, 0); MAX_ORDER],
+            tie_count: 0,
         }
     }
 
@@ -106,7 +116,43 @@ impl KnotMap {
             cols: degree + 2,
             weights,
             alphas: *alphas,
+            ties: [(0, 0); MAX_ORDER],
+            tie_count: 0,
         }
+    }
+
+    /// This map on a periodic space with `distinct` different coefficients after the map
+    /// (coefficient `i + distinct` repeats `i`): every window row whose index has a copy
+    /// on the other side of the seam gains a tie that writes the same combination there.
+    pub(crate) fn with_ties(mut self, distinct: usize) -> Self {
+        let total = self.new_count();
+        for r in 0..self.rows {
+            let i = self.first_new + r;
+            let partner = if i + distinct < total {
+                Some(i + distinct)
+            } else {
+                i.checked_sub(distinct)
+            };
+            if let Some(j) = partner {
+                self.ties[self.tie_count] = (j, r);
+                self.tie_count += 1;
+            }
+        }
+        self
+    }
+
+    /// Whether the map rewrites coefficients on both sides of a periodic seam (it has
+    /// ties): then its change is not one contiguous window.
+    pub fn wraps(&self) -> bool {
+        self.tie_count > 0
+    }
+
+    /// New indices outside [`changed_new`](Self::changed_new) that the map rewrites (the
+    /// periodic copies of window rows), each with the window index it copies.
+    pub fn tied_new(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.ties[..self.tie_count]
+            .iter()
+            .map(|&(j, r)| (j, self.first_new + r))
     }
 
     /// Insertion or removal.
@@ -143,6 +189,10 @@ impl KnotMap {
 
     /// Weight of old coefficient `old` in new coefficient `new` (the matrix β of eq. 5).
     pub fn weight(&self, new: usize, old: usize) -> Real {
+        let new = self
+            .tied_new()
+            .find(|&(j, _)| j == new)
+            .map_or(new, |(_, w)| w);
         if self.changed_new().contains(&new) {
             return match self.source_old().contains(&old) {
                 true => self.weights[new - self.first_new][old - self.first_old],
@@ -179,6 +229,9 @@ impl KnotMap {
             }
         }
         field[self.changed_new()].copy_from_slice(&window[..self.rows]);
+        for &(j, r) in &self.ties[..self.tie_count] {
+            field[j] = window[r];
+        }
     }
 
     /// Bound on how far removing the knot moves the curve with control points `points`:

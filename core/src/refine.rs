@@ -44,6 +44,15 @@ impl RefinementOperator {
         (self.first[j], &self.weights[j][..self.order])
     }
 
+    /// Makes new coefficient `distinct + j` repeat coefficient `j` for every `j` past the
+    /// end (a periodic space's copies across the seam), so they agree bit for bit.
+    pub(crate) fn tie_periodic(&mut self, distinct: usize) {
+        for j in distinct..self.len() {
+            self.first[j] = self.first[j - distinct];
+            self.weights[j] = self.weights[j - distinct];
+        }
+    }
+
     /// Maps `old` (one coefficient per old basis function) into `new` (resized; no
     /// allocation when its capacity allows).
     pub fn apply<T: Coefficient>(&self, old: &[T], new: &mut Vec<T>) {

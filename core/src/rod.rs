@@ -97,6 +97,7 @@ impl Rod {
             });
         }
         check_finite("control point", &positions)?;
+        check_periodic_copies(basis.as_ref(), &positions)?;
         let mut rod = Self {
             velocities: vec![Vector3::zeros(); n],
             positions,
@@ -211,7 +212,12 @@ impl Rod {
     pub fn basis(&self) -> &dyn BasisSpace {
         self.basis.as_ref()
     }
-    /// Number of control points.
+    /// Whether the rod is closed (its basis is periodic: the last `degree` control
+    /// points are copies of the first, see [`BasisSpace::periodic_count`]).
+    pub fn is_closed(&self) -> bool {
+        self.basis.periodic_count().is_some()
+    }
+    /// Number of control points (for a closed rod, with the copies across the seam).
     pub fn len(&self) -> usize {
         self.positions.len()
     }
@@ -335,6 +341,11 @@ impl Rod {
         map.apply_in_place(&mut self.positions);
         map.apply_in_place(&mut self.velocities);
         self.topology_epoch = next_epoch();
+        if map.wraps() {
+            // Changed functions on both sides of a closed rod's seam: not one region.
+            self.rebuild_caches(self.quadrature.points_per_span())?;
+            return Ok(map);
+        }
         let density = Density {
             uniform: self.material.linear_density,
             segments: &self.segments,
@@ -358,6 +369,25 @@ static NEXT_EPOCH: AtomicU64 = AtomicU64::new(1);
 
 fn next_epoch() -> u64 {
     NEXT_EPOCH.fetch_add(1, Ordering::Relaxed)
+}
+
+/// Error naming the first control point of a closed rod that differs from the one it
+/// copies across the seam (`positions[i + m]` must equal `positions[i]`).
+fn check_periodic_copies(
+    basis: &dyn BasisSpace,
+    positions: &[Vector3<Real>],
+) -> Result<(), CoreError> {
+    let Some(m) = basis.periodic_count() else {
+        return Ok(());
+    };
+    match (m..positions.len()).find(|&i| positions[i] != positions[i - m]) {
+        Some(index) => Err(CoreError::InvalidParameter {
+            name: "control point copy across the seam",
+            value: index as Real,
+            reason: "a closed rod's last `degree` control points must equal its first",
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Error naming the first non-finite vector of `field`.

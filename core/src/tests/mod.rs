@@ -2,6 +2,7 @@
 mod basis;
 mod knots;
 mod local_update;
+mod periodic;
 mod proximity;
 mod rod;
 
