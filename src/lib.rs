@@ -90,7 +90,9 @@ pub use splinerod_energies as energies;
 pub use splinerod_integrators as integrators;
 
 pub use splinerod_adaptivity::RefinementCriterion;
-pub use splinerod_core::{BSplineSpace, BasisSpace, Material, Pin, Real, Rod};
+pub use splinerod_core::{
+    BSplineSpace, BasisSpace, Material, PeriodicBSplineSpace, Pin, Real, Rod,
+};
 pub use splinerod_energies::{
     Bending, Clamp, Energy, Gravity, PointSpring, StretchFormulation, Stretching,
 };
@@ -103,9 +105,9 @@ pub use splinerod_integrators::{
 pub mod prelude {
     pub use crate::{
         BSplineSpace, BasisSpace, Bdf2, Bending, Clamp, Energy, Error, Grab, Gravity,
-        ImplicitEuler, ImplicitMidpoint, Integrator, Material, NewtonParams, Pin, Real, Rod,
-        RodSystem, Scene, Simulation, StaticParams, StaticSolver, StretchFormulation, Stretching,
-        System,
+        ImplicitEuler, ImplicitMidpoint, Integrator, Material, NewtonParams, PeriodicBSplineSpace,
+        Pin, Real, Rod, RodSystem, Scene, Simulation, StaticParams, StaticSolver,
+        StretchFormulation, Stretching, System,
     };
     pub use nalgebra::Vector3;
 }

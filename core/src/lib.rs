@@ -47,6 +47,7 @@ pub mod pins;
 pub mod proximity;
 pub mod quadrature;
 pub mod refine;
+mod ring;
 pub mod rod;
 pub mod segments;
 pub mod state;

@@ -180,6 +180,15 @@ pub trait Energy: Send + Sync {
         None
     }
 
+    /// Whether the energy can act on `rod`: an error naming what it cannot handle (a
+    /// closed rod, for an energy defined by the rod's ends). Systems check it when an
+    /// energy is added, and the conformance harness skips the rods it refuses. Default:
+    /// every rod.
+    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
+        let _ = rod;
+        Ok(())
+    }
+
     /// Called before each integrator step (sub-step) of `dt` seconds, at the state it
     /// starts from: freeze per-step data here (contact freezes its friction anchors).
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {

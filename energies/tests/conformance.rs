@@ -137,7 +137,10 @@ fn harness_catches_a_wrong_hessian() {
 /// The default finite-difference Hessian agrees with stretching's exact one.
 #[test]
 fn default_hessian_matches_exact_stretching() {
-    for (label, rod) in splinerod_energies::conformance::test_rods().expect("test rods") {
+    // Closed rods are left out: their Hessian couples the two sides of the seam, outside
+    // the band this finite-difference Hessian fills (the harness checks it densely).
+    let rods = splinerod_energies::conformance::test_rods().expect("test rods");
+    for (label, rod) in rods.into_iter().filter(|(_, r)| !r.is_closed()) {
         let e = Stretching::new(100.0).unwrap();
         let n = rod.len();
         let d = rod.basis().degree();

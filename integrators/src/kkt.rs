@@ -74,7 +74,12 @@ impl Constraints {
         self.projectors.extend(pins.iter().map(Pin::projector));
         self.targets.resize(pins.len(), Vector3::zeros());
         self.n = rod.len();
-        self.points.setup(&self.rows, &self.projectors)?;
+        // A closed rod's copies across the seam are one unknown: eliminating one of them
+        // alone would split it, so its pins all go through the Schur complement.
+        match rod.is_closed() {
+            false => self.points.setup(&self.rows, &self.projectors)?,
+            true => self.points.setup(&[], &[])?,
+        }
         self.general.clear();
         self.general
             .extend((0..pins.len()).filter(|&p| !self.points.contains(p)));

@@ -40,6 +40,7 @@ mod low_rank;
 mod midpoint;
 pub mod modal;
 pub mod newton;
+mod periodic;
 mod point_pins;
 pub mod remainder;
 mod statics;

@@ -246,6 +246,12 @@ pub struct LinearSolver {
     indefinite: bool,
     /// The matrix's low-rank terms, applied after each solve.
     low_rank: crate::low_rank::LowRankCorrections,
+    /// For a closed rod, its number `m` of distinct control points: the matrix is then
+    /// folded onto them ([`crate::periodic`]) and solves keep the copies equal. Set it
+    /// before each factorisation (Newton does, from the rod's basis).
+    pub periodic: Option<usize>,
+    /// The folded system's solver, for a closed rod.
+    folded: Option<Box<crate::periodic::Folded>>,
 }
 
 impl LinearSolver {
@@ -299,6 +305,13 @@ impl LinearSolver {
         self.active = None;
         self.indefinite = false;
         self.low_rank.clear();
+        if let Some(m) = self.periodic_count() {
+            let folded = self.folded.get_or_insert_with(Default::default);
+            folded.solver.kind = self.kind;
+            folded.factor(&self.matrix, m, epoch)?;
+            self.active = folded.solver.factored_with();
+            return Ok(());
+        }
         match kind {
             LinearSolverKind::Banded => {
                 let (n, bw) = crate::banded_cholesky::band_shape(&self.matrix)?;
@@ -340,6 +353,11 @@ impl LinearSolver {
     pub fn factor_indefinite_assembled(&mut self) -> Result<(), IntegratorError> {
         self.active = None;
         self.low_rank.clear();
+        if self.periodic_count().is_some() {
+            return Err(IntegratorError::SolverState(
+                "the indefinite factorisation does not fold a closed rod's matrix",
+            ));
+        }
         if self.consumed {
             return Err(IntegratorError::SolverState(
                 "the matrix was factorised already: assemble it again",
@@ -368,6 +386,14 @@ impl LinearSolver {
     /// Low-rank terms of the matrix (see [`BlockBanded::add_low_rank`]) are applied by
     /// the Sherman–Morrison formula.
     pub fn solve_in_place(&mut self, rhs: &mut [Real]) -> Result<(), IntegratorError> {
+        if let (Some(m), Some(folded)) = (self.periodic_count(), self.folded.as_mut()) {
+            if self.active.is_none() {
+                return Err(IntegratorError::SolverState(
+                    "solve before a successful factor",
+                ));
+            }
+            return folded.solve_in_place(rhs, self.matrix.dim(), m);
+        }
         let matrix = std::mem::take(&mut self.matrix);
         let result = self.solve_band(&matrix, rhs);
         self.matrix = matrix;
@@ -401,6 +427,12 @@ impl LinearSolver {
         }
     }
 
+    /// The distinct control points of a closed rod's matrix, if it is one (and folding
+    /// changes it: `m` smaller than the matrix).
+    fn periodic_count(&self) -> Option<usize> {
+        self.periodic.filter(|&m| m < self.matrix.dim())
+    }
+
     /// The path the last [`factor`](Self::factor) call took, if any.
     pub fn factored_with(&self) -> Option<LinearSolverKind> {
         self.active
@@ -408,7 +440,8 @@ impl LinearSolver {
 
     /// Symbolic analyses run so far (only the sparse path runs them).
     pub fn analyses(&self) -> usize {
-        self.sparse.analyses()
+        let folded = self.folded.as_ref().map_or(0, |f| f.solver.analyses());
+        self.sparse.analyses() + folded
     }
 }
 

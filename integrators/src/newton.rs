@@ -214,6 +214,7 @@ pub fn solve(
 ) -> Result<StepStats, IntegratorError> {
     let n = x.len();
     ws.solver.kind = params.linear_solver;
+    ws.solver.periodic = system.rod().basis().periodic_count();
     ws.resize(n, system.pins().len());
     ws.constraints.setup(system.rod(), system.pins())?;
     for (p, pin) in system.pins().iter().enumerate() {
@@ -431,6 +432,7 @@ pub(crate) fn negative_curvature(
 ) -> Result<Option<Real>, IntegratorError> {
     let n = system.rod().len();
     ws.resize(n, system.pins().len());
+    ws.solver.periodic = system.rod().basis().periodic_count();
     ws.constraints.setup(system.rod(), system.pins())?;
     assemble(problem, system, ws, false);
     let epoch = system.rod().topology_epoch();

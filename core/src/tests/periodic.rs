@@ -326,3 +326,51 @@ proptest! {
         prop_assert!(max_difference((&space, &q), (&fine, &q1)) < 1e-12);
     }
 }
+
+/// Largest relative deviation of a ring's radius from `radius`, and its length.
+fn ring_fit(rod: &Rod, center: Vector3<Real>, radius: Real) -> (Real, Real) {
+    let l = rod.material().rest_length;
+    let samples = 2000;
+    let (mut worst, mut length) = (0.0, 0.0);
+    for k in 0..samples {
+        let s = l * (k as Real + 0.5) / samples as Real;
+        let r = (rod.point(s).unwrap() - center).norm();
+        worst = Real::max(worst, (r / radius - 1.0).abs());
+        length += rod.tangent(s).unwrap().norm() * l / samples as Real;
+    }
+    (worst, length)
+}
+
+#[test]
+fn a_ring_fits_its_circle_to_the_order_of_the_basis() {
+    let (center, normal) = (Vector3::new(0.3, -1.0, 2.0), Vector3::new(1.0, 1.0, 0.5));
+    let radius = 0.25;
+    let material = Material {
+        rest_length: std::f64::consts::TAU * radius,
+        linear_density: 0.1,
+    };
+    let mut previous = Real::INFINITY;
+    for m in [8, 16, 32] {
+        let space = PeriodicBSplineSpace::uniform(3, m, material.rest_length).unwrap();
+        let rod = Rod::ring(material, Box::new(space), center, normal, radius).unwrap();
+        let (deviation, length) = ring_fit(&rod, center, radius);
+        let stretch = length / material.rest_length - 1.0;
+        println!("{m} control points: radius within {deviation:.2e}, length {stretch:+.2e}");
+        // In the plane, and fourth order (h⁴: 16 times smaller per halving, here ≥ 12).
+        for q in &rod.positions {
+            assert!((q - center).dot(&normal.normalize()).abs() < 1e-14);
+        }
+        assert!(deviation < previous / 12.0 && deviation < 3e-3);
+        assert!(stretch.abs() < 2.0 * deviation);
+        previous = deviation;
+    }
+    let space = || Box::new(PeriodicBSplineSpace::uniform(3, 8, material.rest_length).unwrap());
+    let bad =
+        |normal: Vector3<Real>, radius: Real| Rod::ring(material, space(), center, normal, radius);
+    assert!(bad(Vector3::zeros(), 0.1).is_err());
+    assert!(bad(normal, 0.0).is_err());
+    assert!(bad(normal, Real::NAN).is_err());
+    assert!(bad(normal, 0.1).is_ok());
+    let open = crate::BSplineSpace::clamped_uniform(3, 8, material.rest_length).unwrap();
+    assert!(Rod::ring(material, Box::new(open), center, normal, 0.1).is_err());
+}

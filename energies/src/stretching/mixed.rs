@@ -84,6 +84,7 @@
 //! \\(\\tfrac{EA}{2}\\lVert\\varepsilon - \\Pi\\varepsilon\\rVert^2\\) before it, and it stays
 //! below the pointwise energy (`tests/consistent_gram.rs`).
 
+use super::seam;
 use super::table::{Moment, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::{Matrix3, Vector3};
@@ -242,7 +243,7 @@ impl Stretching {
     /// Gradient of the mixed form, \\(\\int T\\, g_0^{-1/2} b_a' C'\\, ds\\) with the tension
     /// field `T` at each quadrature point.
     pub(super) fn mixed_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        if self.table.matches(rod) {
+        if self.table.matches(rod) || rod.is_closed() {
             return self.with_consistent_tensions(rod, |t| {
                 self.for_each_moment(rod, |k| {
                     let tension = self.tension_of(t, k.index, k.b, k.m);
@@ -276,7 +277,8 @@ impl Stretching {
         rod: &Rod,
         f: impl FnOnce(Option<&[(Real, Real)]>) -> R,
     ) -> R {
-        if self.consistent() {
+        // A closed rod's split pairs share a tension: from the merged moments.
+        if self.consistent() || rod.is_closed() {
             self.with_tensions(rod, |t| f(Some(t)))
         } else {
             f(None)
@@ -320,7 +322,7 @@ impl Stretching {
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
-        if self.table.matches(rod) {
+        if self.table.matches(rod) || rod.is_closed() {
             return self.tabulated_derivatives(rod, kind, gradient, hessian);
         }
         let d = rod.basis().degree();
@@ -356,15 +358,26 @@ impl Stretching {
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
+        let merged = self.merged_weights(rod);
+        let mut heads = rod.is_closed().then(seam::Heads::default);
         self.with_consistent_tensions(rod, |t| {
             self.for_each_moment(rod, |k| {
-                let c = self.lumped_stiffness(k.m);
+                let c = self.lumped_stiffness(merged.get(k.index).map_or(k.m, |p| p.1));
                 let tension = self.tension_of(t, k.index, k.b, k.m);
                 if let Some(g) = gradient.as_deref_mut() {
                     add_scaled(g, k.first, k.db, tension);
                 }
                 add_outer_products(hessian, k.first, c, k.db);
                 add_scaled_identities(hessian, k, geometric_tension(kind, tension));
+                if let Some(heads) = heads.as_mut() {
+                    match seam::partner(rod, k.index) {
+                        Some(tail) if tail > k.index => heads.keep(k.index, k.first, k.db),
+                        Some(head) => {
+                            seam::add_cross_term(hessian, c, heads.get(head), (k.first, k.db))
+                        }
+                        None => {}
+                    }
+                }
             });
         });
     }

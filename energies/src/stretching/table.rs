@@ -151,6 +151,12 @@ impl TensionTable {
         }
     }
 
+    /// The weight \(m_k\) of function `index` (`1 ..= n − 1`).
+    #[inline]
+    pub fn weight(&self, index: usize) -> Real {
+        self.m[index - 1]
+    }
+
     /// The [`Moment`] of function `index` from its strain moment, weight and derivatives
     /// computed before (by [`Self::for_each`] at the same positions).
     pub fn moment<'a>(

@@ -22,6 +22,7 @@
 //! conjugate gradients (`splinerod_integrators::remainder`).
 
 use super::gram::TensionGram;
+use super::seam::Merged;
 use super::table::{Moment, TensionTable, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::Vector3;
@@ -39,6 +40,9 @@ thread_local! {
     static GRAM: RefCell<TensionGram> = RefCell::new(TensionGram::default());
     /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
     static ROWS: RefCell<Rows> = RefCell::new(Rows::default());
+    /// The table of a closed rod the energy's own does not match, and the energy (address)
+    /// it was built for.
+    static TABLE: RefCell<(usize, TensionTable)> = RefCell::new((0, TensionTable::default()));
 }
 
 /// The rows of `B = ∂b/∂q` at one state, kept between the remainder products of one
@@ -147,8 +151,11 @@ impl Stretching {
                     }
                 });
             } else {
+                // A closed rod's split functions take the tension of their pair.
+                let merged = Merged::of(rod, |j| moments[j]);
                 for (j, m) in moments.iter_mut().enumerate() {
-                    let stretch = if m.1 > 0.0 { ea * m.0 / m.1 } else { 0.0 };
+                    let (b, w) = merged.get(j).unwrap_or(*m);
+                    let stretch = if w > 0.0 { ea * b / w } else { 0.0 };
                     *m = (self.multiplier(j) + stretch, m.0);
                 }
             }
@@ -204,7 +211,34 @@ impl Stretching {
                 hold
             });
         if !cached {
-            self.table.for_each(rod, f);
+            self.with_table(rod, |table| table.for_each(rod, f));
+        }
+    }
+
+    /// Calls `f` with the tension table of `rod`: the energy's own when it matches, else
+    /// one built for it (closed rods use the table even on scratch copies, for the
+    /// merged pairs of [`super::seam`]).
+    pub(super) fn with_table<R>(&self, rod: &Rod, f: impl FnOnce(&TensionTable) -> R) -> R {
+        if self.table.matches(rod) {
+            return f(&self.table);
+        }
+        TABLE.with(|cell| {
+            let mut cached = cell.borrow_mut();
+            let owner = self as *const Stretching as usize;
+            if cached.0 != owner || !cached.1.matches(rod) {
+                cached.1.build(self, rod);
+                cached.0 = owner;
+            }
+            f(&cached.1)
+        })
+    }
+
+    /// The merged weights of a closed rod's split tension functions (nothing merged for
+    /// an open rod).
+    pub(super) fn merged_weights(&self, rod: &Rod) -> Merged {
+        match rod.is_closed() {
+            true => self.with_table(rod, |t| Merged::of(rod, |j| (0.0, t.weight(j)))),
+            false => Merged::of(rod, |_| (0.0, 0.0)),
         }
     }
 

@@ -420,8 +420,20 @@ impl Energy for Twisting {
         Ok(())
     }
 
+    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
+        match rod.is_closed() {
+            true => Err(CoreError::InvalidParameter {
+                name: "twist",
+                value: 0.0,
+                reason: "twisting between two clamps needs an open rod (closed rods have no ends)",
+            }),
+            false => Ok(()),
+        }
+    }
+
     fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
         let _ = dt;
+        self.supports(rod)?;
         if !self.released {
             let branch = self.holonomies(&self.prepared(rod));
             self.branch = branch;

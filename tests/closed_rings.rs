@@ -1,0 +1,179 @@
+//! Closed rods (#20): rings on a periodic basis, against known answers.
+
+use splinerod::prelude::*;
+use std::f64::consts::TAU;
+
+/// A free ring of rest radius `r0` (μ = 0.1 kg/m, EA = 10 N), `m` cubic control points,
+/// stretched uniformly by `strain` and released; only stretching acts.
+fn free_ring(m: usize, r0: Real, strain: Real, formulation: StretchFormulation) -> RodSystem {
+    let material = Material {
+        rest_length: TAU * r0,
+        linear_density: 0.1,
+    };
+    let space = PeriodicBSplineSpace::uniform(3, m, material.rest_length).expect("space");
+    let (center, normal) = (Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.0, 0.3, 1.0));
+    let rod = Rod::ring(
+        material,
+        Box::new(space),
+        center,
+        normal,
+        r0 * (1.0 + strain),
+    )
+    .expect("ring")
+    .with_quadrature_points(formulation.points_per_span(3))
+    .expect("quadrature");
+    let mut stretching = Stretching::new(10.0).expect("stretching");
+    stretching.formulation = formulation;
+    RodSystem::new(rod).with_energy(stretching)
+}
+
+/// Mean distance of the curve from the ring's centre of mass.
+fn mean_radius(rod: &Rod) -> Real {
+    let c = rod.centre_of_mass();
+    let l = rod.material().rest_length;
+    let samples = 64;
+    (0..samples)
+        .map(|k| (rod.point(l * k as Real / samples as Real).expect("point") - c).norm())
+        .sum::<Real>()
+        / samples as Real
+}
+
+/// Angular frequency of `y` from its upward crossings of its mid-range.
+fn angular_frequency(t: &[Real], y: &[Real]) -> Real {
+    let mid = 0.5
+        * (y.iter().cloned().fold(Real::INFINITY, Real::min)
+            + y.iter().cloned().fold(Real::NEG_INFINITY, Real::max));
+    let crossings: Vec<Real> = (1..y.len())
+        .filter(|&k| y[k - 1] < mid && y[k] >= mid)
+        .map(|k| t[k - 1] + (t[k] - t[k - 1]) * (mid - y[k - 1]) / (y[k] - y[k - 1]))
+        .collect();
+    assert!(crossings.len() >= 3, "too few oscillations");
+    TAU * (crossings.len() - 1) as Real / (crossings[crossings.len() - 1] - crossings[0])
+}
+
+#[test]
+fn a_free_ring_breathes_at_the_exact_frequency() {
+    let (r0, ea, mu) = (0.2, 10.0, 0.1);
+    let exact = (ea / mu as Real).sqrt() / r0;
+    let period = TAU / exact;
+    for formulation in [StretchFormulation::Pointwise, StretchFormulation::Mixed] {
+        let system = free_ring(32, r0, 1e-3, formulation);
+        let momentum = system.rod.linear_momentum();
+        let mut sim = Simulation::new(
+            system,
+            Box::new(ImplicitMidpoint::new(NewtonParams::default()).expect("midpoint")),
+        );
+        let dt = period / 800.0;
+        let (mut t, mut r) = (vec![0.0], vec![mean_radius(&sim.system.rod)]);
+        while sim.time < 5.0 * period {
+            sim.step(dt).expect("step");
+            t.push(sim.time);
+            r.push(mean_radius(&sim.system.rod));
+        }
+        let omega = angular_frequency(&t, &r);
+        let error = (omega / exact - 1.0).abs();
+        println!(
+            "{formulation:?}: ω = {omega:.6} rad/s (exact {exact:.6}), relative error {error:.2e}"
+        );
+        assert!(error <= 1e-4);
+        assert!((sim.system.rod.linear_momentum() - momentum).norm() < 1e-12);
+        let m = sim.system.rod.basis().periodic_count().expect("closed");
+        for i in m..sim.system.rod.len() {
+            assert_eq!(sim.system.rod.positions[i], sim.system.rod.positions[i - m]);
+        }
+    }
+}
+
+/// Breakpoints of the wobbly ring (period 1.3 m).
+const BREAKS: [Real; 14] = [
+    0.0, 0.07, 0.2, 0.26, 0.41, 0.5, 0.62, 0.7, 0.83, 0.9, 1.02, 1.1, 1.19, 1.25,
+];
+
+/// A wobbly, spinning, falling ring on irregular knots, with its parameter origin at
+/// breakpoint `origin` of the reference ring: bending, gravity and `formulation`.
+fn wobbly_ring(origin: usize, formulation: StretchFormulation) -> RodSystem {
+    let l = 1.3;
+    let breaks = BREAKS;
+    let m = breaks.len();
+    let shift = breaks[origin];
+    let rotated: Vec<Real> = (0..m)
+        .map(|j| breaks[(j + origin) % m] - shift)
+        .map(|u| if u < 0.0 { u + l } else { u })
+        .collect();
+    let space = PeriodicBSplineSpace::new(3, rotated, l).expect("space");
+    let material = Material {
+        rest_length: l,
+        linear_density: 0.1,
+    };
+    let point = |j: usize| {
+        let a = TAU * j as Real / m as Real;
+        Vector3::new(
+            0.2 * a.cos() * (1.0 + 0.1 * (3.0 * a).sin()),
+            0.2 * a.sin(),
+            0.03 * (2.0 * a).cos(),
+        )
+    };
+    let spin = |j: usize| {
+        let a = TAU * j as Real / m as Real;
+        Vector3::new(-a.sin(), a.cos(), 0.5 * (5.0 * a).sin())
+    };
+    let count = space.count();
+    let positions = (0..count).map(|i| point((i + origin) % m)).collect();
+    let mut rod = Rod::new(material, Box::new(space), positions)
+        .expect("rod")
+        .with_quadrature_points(formulation.points_per_span(3))
+        .expect("quadrature");
+    rod.velocities = (0..count).map(|i| spin((i + origin) % m)).collect();
+    let mut stretching = Stretching::new(50.0).expect("stretching");
+    stretching.formulation = formulation;
+    RodSystem::new(rod)
+        .with_energy(stretching)
+        .with_energy(Bending::new(1e-4).expect("bending"))
+        .with_energy(Gravity::new(Vector3::new(0.0, 0.0, -9.81)).expect("gravity"))
+}
+
+#[test]
+fn a_closed_rod_has_no_seam() {
+    for formulation in [StretchFormulation::Pointwise, StretchFormulation::Mixed] {
+        let run = |origin: usize| {
+            let euler = ImplicitEuler::new(NewtonParams::default()).expect("euler");
+            let mut sim = Simulation::new(wobbly_ring(origin, formulation), Box::new(euler));
+            for _ in 0..50 {
+                sim.step(2e-3).expect("step");
+            }
+            sim.system.rod
+        };
+        let reference = run(0);
+        let l = reference.material().rest_length;
+        for origin in [1, 5, 12] {
+            let rotated = run(origin);
+            let shift = BREAKS[origin];
+            let mut worst: Real = 0.0;
+            for k in 0..200 {
+                let s = l * k as Real / 200.0;
+                let s_rotated = (s - shift).rem_euclid(l);
+                let a = reference.point(s).expect("point");
+                let b = rotated.point(s_rotated).expect("point");
+                worst = worst.max((a - b).norm());
+            }
+            println!(
+                "{formulation:?}, origin at breakpoint {origin}: largest difference {worst:.2e} m"
+            );
+            assert!(worst < 1e-12, "{formulation:?}: {worst:e}");
+        }
+    }
+}
+
+#[test]
+fn formulations_that_need_an_open_rod_say_so() {
+    let system = free_ring(16, 0.2, 1e-3, StretchFormulation::MixedConsistent);
+    let mut sim = Simulation::new(
+        system,
+        Box::new(ImplicitMidpoint::new(NewtonParams::default()).expect("midpoint")),
+    );
+    let err = sim
+        .step(1e-3)
+        .expect_err("mixed-consistent on a closed rod");
+    assert!(err.to_string().contains("stretch_formulation"), "{err}");
+    assert_eq!(sim.steps, 0);
+}
