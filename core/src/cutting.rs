@@ -68,9 +68,14 @@ impl Rod {
         self.cut_points().collect()
     }
 
-    /// Number of mechanically independent pieces (one more than the number of cuts).
+    /// Number of mechanically independent pieces: one more than the number of cuts, or
+    /// for a closed rod as many as its cuts (the first cut opens the loop), at least one.
     pub fn pieces(&self) -> usize {
-        self.cut_points().count() + 1
+        let cuts = self.cut_points().count();
+        match self.is_closed() {
+            true => cuts.max(1),
+            false => cuts + 1,
+        }
     }
 
     /// Whether knot `index` belongs to a cut (removing it would reconnect two pieces).

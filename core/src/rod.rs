@@ -221,6 +221,11 @@ impl Rod {
     pub fn len(&self) -> usize {
         self.positions.len()
     }
+    /// Number of distinct control points: [`len`](Self::len) for an open rod, without
+    /// the copies across the seam for a closed one (what outputs report).
+    pub fn distinct_len(&self) -> usize {
+        self.basis.periodic_count().unwrap_or(self.positions.len())
+    }
     /// Whether the rod has no control points (never true for a constructed rod).
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()

@@ -194,6 +194,14 @@ pub(crate) fn framing_points(frame: &Frame<'_>) -> Result<Vec<Vector3<Real>>, Er
         }
     }
     points.extend(reach);
+    // A rod that can fall onto the floor (y = floor) lands in the picture.
+    if let Some(floor) = frame.scene.contact.as_ref().and_then(|c| c.floor) {
+        let shadows: Vec<_> = points
+            .iter()
+            .map(|p| Vector3::new(p.x, floor, p.z))
+            .collect();
+        points.extend(shadows);
+    }
     Ok(points)
 }
 

@@ -137,7 +137,7 @@ fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error
     let caption = format!(
         "t = {:.4} s   {steps}   {} control points{pieces}   view {}   1 px = {:.3} mm",
         frame.time,
-        rod.len(),
+        rod.distinct_len(),
         view.camera.name(),
         view.metres_per_pixel() * 1e3,
     );

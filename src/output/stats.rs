@@ -159,7 +159,7 @@ impl Observer for StatsWriter {
         let mut row = vec![
             frame.time.to_string(),
             frame.step.to_string(),
-            frame.system.rod.len().to_string(),
+            frame.system.rod.distinct_len().to_string(),
             report.solver.newton_iterations.to_string(),
             report.solver.converged.to_string(),
             report.solver.residual.to_string(),

@@ -52,7 +52,7 @@ pub(crate) fn summarize(
         damping: scene.rod.damping,
         sag: 0.5 * (a.y + b.y) - m.y,
         energy,
-        control_points: rod.len(),
+        control_points: rod.distinct_len(),
         contact: tally.contact,
         estimated_error: tally.estimates.as_ref().map(|e| e.estimated_error),
     })

@@ -374,7 +374,7 @@ pub(crate) fn finish(
     Ok(RunResult {
         time: sim.time,
         steps: sim.steps,
-        control_points: rod.len(),
+        control_points: rod.distinct_len(),
         wall_seconds: wall,
         samples: Samples {
             s,

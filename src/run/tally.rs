@@ -32,7 +32,7 @@ impl Tally {
         let mut tally = Self {
             solver: SolverTotals::default(),
             probes: probes_at_start(scene, system)?,
-            history: vec![[0.0, system.rod.len() as Real]],
+            history: vec![[0.0, system.rod.distinct_len() as Real]],
             contact: None,
             knot: None,
             estimates: None,
@@ -77,7 +77,7 @@ impl Tally {
         }
         let time = sim.time;
         self.cuts.apply(time, dt, |s| sim.cut(s))?;
-        self.count(sim.time, sim.system.rod.len());
+        self.count(sim.time, sim.system.rod.distinct_len());
         self.probe(scene, &sim.system, sim.time)?;
         Ok(start.elapsed().as_secs_f64())
     }

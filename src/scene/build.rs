@@ -64,12 +64,13 @@ impl Scene {
     /// The basis space on `[0, L]` described by `rod.knots`.
     pub fn basis(&self) -> Result<BSplineSpace, Error> {
         let r = &self.rod;
-        let given = match &r.knots {
+        let layout = r.knot_layout();
+        let given = match &layout {
             KnotsSpec::Named(name) => format!("\"{name}\""),
             KnotsSpec::Explicit(k) => format!("{k:?}"),
         };
         let wrap = |e: splinerod_core::CoreError| Error::field("rod.knots", &given, e.to_string());
-        match &r.knots {
+        match &layout {
             KnotsSpec::Named(name) if name == "uniform" => {
                 BSplineSpace::uniform(r.degree, r.control_points, r.rest_length).map_err(wrap)
             }
@@ -97,11 +98,11 @@ impl Scene {
             rest_length: r.rest_length,
             linear_density: r.linear_density,
         };
-        let basis = Box::new(self.basis()?);
         let mut rod = match &r.initial_control_points {
+            _ if self.closed() => self.build_closed_rod(material)?,
             Some(points) => Rod::new(
                 material,
-                basis,
+                Box::new(self.basis()?),
                 points.iter().map(|p| Vector3::from(*p)).collect(),
             )?,
             None => {
@@ -110,7 +111,7 @@ impl Scene {
                     .end
                     .map(Vector3::from)
                     .unwrap_or(start + Vector3::new(r.rest_length, 0.0, 0.0));
-                Rod::straight(material, basis, start, end)?
+                Rod::straight(material, Box::new(self.basis()?), start, end)?
             }
         };
         rod.damping = r.damping;

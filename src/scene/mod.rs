@@ -7,6 +7,7 @@
 
 pub(crate) mod adapt;
 mod build;
+pub(crate) mod closed;
 pub(crate) mod contact;
 pub(crate) mod ensemble;
 pub mod limits;
@@ -20,6 +21,7 @@ pub(crate) mod solver;
 
 pub(crate) use crate::error::{finite_vec, fraction, non_negative, positive};
 pub use crate::scene::adapt::{AdaptivitySpec, CutSpec, GrabSpec};
+pub use crate::scene::closed::RingSpec;
 pub use crate::scene::contact::ContactSpec;
 pub use crate::scene::ensemble::EnsembleSpec;
 pub use crate::scene::limits::{Limits, Resources};
@@ -116,8 +118,13 @@ pub struct RodSpec {
     pub degree: usize,
     /// `"clamped"` (default), `"uniform"`, or an explicit non-decreasing knot vector of
     /// `control_points + degree + 1` values (any units; the domain is mapped to `[0, L]`).
+    /// A closed rod's are periodic ([`closed`]). Read it through [`RodSpec::knot_layout`].
+    pub knots: Option<KnotsSpec>,
+    /// A closed rod: the curve wraps from the end back to the start ([`closed`]).
     #[serde(default)]
-    pub knots: KnotsSpec,
+    pub closed: bool,
+    /// `[rod.ring]`: a closed rod's initial circle (makes the rod closed).
+    pub ring: Option<RingSpec>,
     /// Start of the initial straight shape, m. Default the origin.
     pub start: Option<[f64; 3]>,
     /// End of the initial straight shape, m. Default `start + (L, 0, 0)`.
@@ -137,6 +144,13 @@ pub struct RodSpec {
     /// accurate where the strain varies) or `"pointwise"` (the paper's eq. 12).
     #[serde(default)]
     pub stretch_formulation: StretchFormulationSpec,
+}
+
+impl RodSpec {
+    /// `knots` as given, `"clamped"` when not.
+    pub fn knot_layout(&self) -> KnotsSpec {
+        self.knots.clone().unwrap_or_default()
+    }
 }
 
 /// `rod.stretch_stiffness`: a number, or the string `"inextensible"` as `+∞`.
@@ -403,7 +417,10 @@ impl Scene {
 
     fn validate_shape(&self) -> Result<(), Error> {
         let r = &self.rod;
-        match &r.knots {
+        if self.closed() {
+            return self.validate_closed();
+        }
+        match &r.knot_layout() {
             KnotsSpec::Named(name) if name == "clamped" || name == "uniform" => {}
             KnotsSpec::Named(name) => {
                 return Err(Error::field(

@@ -282,6 +282,7 @@ impl Mechanics<'_> {
         s.flat.clear();
         s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
         s.solves += 1;
+        s.solver.periodic = fine.basis().periodic_count();
         if s.solver.factor(stiffness, s.solves).is_err()
             || s.solver.solve_in_place(&mut s.flat).is_err()
         {
@@ -356,6 +357,16 @@ impl FineProblem for Mechanics<'_> {
                     .filter(|(_, &b)| b != 0.0)
                     .map(|(k, _)| row.first + k),
             );
+        }
+        // A closed rod's copies across the seam are held with what they copy.
+        if let Some(m) = fine.basis().periodic_count() {
+            for i in 0..held.len() {
+                let k = held[i];
+                let copy = if k < m { k + m } else { k - m };
+                if copy < fine.len() {
+                    held.push(copy);
+                }
+            }
         }
         for &k in held.iter() {
             residual[k] = Vector3::zeros();

@@ -192,7 +192,7 @@ impl Simulation {
         Ok(StepReport {
             solver,
             adapt,
-            control_points: self.system.rod.len(),
+            control_points: self.system.rod.distinct_len(),
             stages: self.clock,
             substeps,
             energies: self.system.summary()?,

@@ -12,7 +12,7 @@
 //! come within the reach `2r + δ` on every axis and they are
 //! at least `exclusion` apart along the rod (closer segments are neighbours: their
 //! closest points would be where they join; across a cut too, so the two new ends of a
-//! cut separate freely). Cost O(m log m) for `m` segments, plus the candidates.
+//! cut separate freely; on a closed rod, also around the seam). Cost O(m log m) for `m` segments, plus the candidates.
 //!
 //! **Sample pairs.** Each segment carries material sample points (midpoint rule, at most
 //! `spacing` apart, with their basis rows cached per basis); the contact energy sums a
@@ -215,7 +215,8 @@ impl Detector {
             self.placed_all = true;
             self.segment_widths(rod);
             self.bound_segments();
-            self.sweep(reach + margin, exclusion);
+            let period = rod.is_closed().then(|| rod.material().rest_length);
+            self.sweep(reach + margin, exclusion, period);
             self.candidates_exact = false;
             let wide = reach + margin;
             let p = &self.samples.position;
@@ -267,7 +268,8 @@ impl Detector {
                 }
                 let exclusion = self.skin.key.map_or(0.0, |(_, settings)| settings[1]);
                 self.bound_segments();
-                self.sweep(reach, exclusion);
+                let period = rod.is_closed().then(|| rod.material().rest_length);
+                self.sweep(reach, exclusion, period);
                 self.candidates_exact = true;
             }
             for k in 0..self.candidates.len() {
@@ -443,7 +445,10 @@ impl Detector {
     /// Sort and sweep over the segment boxes ([`BoxSweep`]): candidate segment pairs,
     /// boxes closer than `reach` on every axis and segments at least `exclusion` apart
     /// along the rod.
-    fn sweep(&mut self, reach: Real, exclusion: Real) {
+    /// Candidate segment pairs: boxes within `reach`, segments at least `exclusion`
+    /// apart along the rod — around the loop either way for a closed rod of length
+    /// `period`.
+    fn sweep(&mut self, reach: Real, exclusion: Real, period: Option<Real>) {
         self.candidates.clear();
         self.sweep.sort(&self.lower, &self.upper);
         let (segments, candidates) = (&self.segments, &mut self.candidates);
@@ -453,7 +458,11 @@ impl Detector {
             } else {
                 (j, i)
             };
-            if segments[second].lo - segments[first].hi >= exclusion {
+            let apart = segments[second].lo - segments[first].hi;
+            let around = period.map_or(Real::INFINITY, |l| {
+                l - segments[second].hi + segments[first].lo
+            });
+            if apart.min(around) >= exclusion {
                 candidates.push((first as u32, second as u32));
             }
         });

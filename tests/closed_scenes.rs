@@ -1,0 +1,186 @@
+//! Closed rods in scenes (#20): `[rod.ring]` and `closed = true`, with contact, pins,
+//! cuts and adaptivity; bad input named.
+
+mod common;
+
+use common::*;
+use splinerod::prelude::*;
+use splinerod::run;
+
+/// A ring of 16 control points (rest radius 0.1 m, at rest) under gravity, held at one
+/// material point.
+const RING: &str = r#"[rod]
+rest_length = 0.6283185307179586
+linear_density = 0.05
+stretch_stiffness = 50.0
+bending_stiffness = 1e-4
+damping = 1.0
+control_points = 16
+
+[rod.ring]
+radius = 0.1
+center = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+
+[[pins]]
+at = 0.25
+
+[solver]
+method = "implicit-euler"
+dt = 0.002
+duration = 0.3
+
+[output]
+samples = 41
+probes = [0.0, 0.5]
+"#;
+
+#[test]
+fn the_bundled_ring_lands_flat_on_the_floor() {
+    let scene = Scene::load("scenes/ring_drop.toml").expect("scene");
+    let result = run(&scene).expect("run");
+    assert_eq!(result.control_points, 16);
+    assert_eq!(result.pieces, 1);
+    let r = scene.rod.radius.expect("radius");
+    let ys: Vec<Real> = result.samples.positions.iter().map(|p| p[1]).collect();
+    let (low, high) = ys
+        .iter()
+        .fold((Real::INFINITY, Real::NEG_INFINITY), |(a, b), &y| {
+            (a.min(y), b.max(y))
+        });
+    println!("ring on the floor: centre line between y = {low:.5} and {high:.5} m (radius {r} m)");
+    // Lying flat on the floor: every point at one radius above it, within the
+    // penalty's indentation.
+    assert!(low > 0.5 * r && high < 1.5 * r, "{low} {high}");
+    // The sampled curve closes: s = 0 and s = L are one point.
+    let (first, last) = (
+        result.samples.positions[0],
+        *result.samples.positions.last().expect("samples"),
+    );
+    let gap = (Vector3::from(first) - Vector3::from(last)).norm();
+    assert!(gap < 1e-12, "{gap}");
+}
+
+#[test]
+fn a_ring_hangs_from_a_pin_without_a_seam() {
+    // The seam (s = 0) hangs to one side; the ring is symmetric about the pin's
+    // vertical, so the material points a quarter turn either side of the pin (one of
+    // them the seam) end mirror images.
+    let result = run(&accepted(RING)).expect("run");
+    let p = |k: usize| Vector3::from(result.probes[k].positions.last().copied().expect("probe"));
+    let (seam, opposite) = (p(0), p(1));
+    let pin = Vector3::new(0.0, 0.1, 0.0);
+    println!("seam at {seam:?}, opposite at {opposite:?}");
+    assert!((seam.y - opposite.y).abs() < 1e-9 && (seam.x + opposite.x).abs() < 1e-9);
+    assert!(seam.y < pin.y, "the ring hangs");
+}
+
+#[test]
+fn cutting_a_ring_opens_it_then_splits_it() {
+    let once = with_line_in(RING, "[solver]", "");
+    let once = format!("{once}\n[[cuts]]\nat = 0.6\ntime = 0.1\n");
+    let result = run(&accepted(&once)).expect("run");
+    assert_eq!(result.pieces, 1, "one cut opens the loop");
+    let twice = format!("{once}\n[[cuts]]\nat = 0.9\ntime = 0.1\n");
+    let result = run(&accepted(&twice)).expect("run");
+    assert_eq!(result.pieces, 2, "two cuts make two pieces");
+}
+
+#[test]
+fn a_ring_refines_where_it_is_pulled() {
+    let pulled = format!(
+        "{RING}\n[[grabs]]\nat = 0.75\nto = [0.0, -0.25, 0.0]\nstart_time = 0.0\nend_time = 0.2\nstiffness = 500.0\n\n[adaptivity]\nmax_control_points = 40\n"
+    );
+    let result = run(&accepted(&pulled)).expect("run");
+    println!("pulled ring: {} control points", result.control_points);
+    assert!(result.control_points > 16);
+    let gap = (Vector3::from(result.samples.positions[0])
+        - Vector3::from(*result.samples.positions.last().expect("s")))
+    .norm();
+    assert!(gap < 1e-12);
+}
+
+#[test]
+fn bad_closed_rods_are_named() {
+    let closed = set_in(
+        &without_in(&without_in(RING, "center"), "normal"),
+        "radius",
+        "0.1",
+    );
+    let clamped = with_line_in(&closed, "[rod]", "knots = \"clamped\"");
+    assert_field(&rejected(&clamped), "rod.knots");
+    assert_field(
+        &rejected(&set_in(&closed, "control_points", "3")),
+        "rod.control_points",
+    );
+    for radius in ["0.0", "-0.1", "nan", "inf"] {
+        assert_field(
+            &rejected(&set_in(&closed, "radius", radius)),
+            "rod.ring.radius",
+        );
+    }
+    let flat = with_line_in(&closed, "[rod.ring]", "normal = [0.0, 0.0, 0.0]");
+    assert_field(&rejected(&flat), "rod.ring.normal");
+    let started = with_line_in(&closed, "[rod]", "start = [0.0, 0.0, 0.0]");
+    assert_field(&rejected(&started), "rod.start");
+    let no_shape = RING
+        .replace(
+            "[rod.ring]\nradius = 0.1\ncenter = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n",
+            "",
+        )
+        .replace("control_points = 16", "control_points = 16\nclosed = true");
+    assert_field(&rejected(&no_shape), "rod.closed");
+    let consistent = with_line_in(
+        &closed,
+        "[rod]",
+        "stretch_formulation = \"mixed-consistent\"",
+    );
+    assert_field(&rejected(&consistent), "rod.stretch_formulation");
+    let clamp = with_line_in(&closed, "[[pins]]", "clamp = true");
+    assert_field(&rejected(&clamp), "pins[0].clamp");
+    let twist = with_line_in(&closed, "[rod]", "twist_stiffness = 1e-4");
+    assert_field(&rejected(&twist), "rod.twist_stiffness");
+    // Explicit periodic breakpoints: control_points + 1 of them.
+    let knots: Vec<String> = (0..=16).map(|k| format!("{}", k as f64)).collect();
+    accepted(&with_line_in(
+        &closed,
+        "[rod]",
+        &format!("knots = [{}]", knots.join(", ")),
+    ));
+    let short = &knots[..16];
+    assert_field(
+        &rejected(&with_line_in(
+            &closed,
+            "[rod]",
+            &format!("knots = [{}]", short.join(", ")),
+        )),
+        "rod.knots",
+    );
+}
+
+#[test]
+fn initial_control_points_wrap_around() {
+    // A square loop of 8 points: the curve closes and is smooth at the seam.
+    let points = "[[0.1, 0.0, 0.0], [0.1, 0.1, 0.0], [0.0, 0.1, 0.0], [-0.1, 0.1, 0.0], [-0.1, 0.0, 0.0], [-0.1, -0.1, 0.0], [0.0, -0.1, 0.0], [0.1, -0.1, 0.0]]";
+    let text = RING
+        .replace(
+            "[rod.ring]\nradius = 0.1\ncenter = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\n",
+            "",
+        )
+        .replace(
+            "control_points = 16",
+            &format!("control_points = 8\nclosed = true\ninitial_control_points = {points}"),
+        );
+    let scene = accepted(&text);
+    let system = scene.build_system().expect("system");
+    let rod = &system.rod;
+    assert!(rod.is_closed());
+    assert_eq!((rod.len(), rod.distinct_len()), (11, 8));
+    let l = rod.material().rest_length;
+    for (a, b) in [
+        (rod.point(0.0), rod.point(l)),
+        (rod.tangent(0.0), rod.tangent(l)),
+    ] {
+        assert!((a.expect("a") - b.expect("b")).norm() < 1e-14);
+    }
+}
