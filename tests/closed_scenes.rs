@@ -184,3 +184,44 @@ fn initial_control_points_wrap_around() {
         assert!((a.expect("a") - b.expect("b")).norm() < 1e-14);
     }
 }
+
+#[test]
+fn a_rubber_band_on_two_pegs_pulls_each_with_twice_its_tension() {
+    let text = std::fs::read_to_string("scenes/rubber_band.toml").expect("scene");
+    let scene = accepted(&set_in(&text, "samples", "801"));
+    let result = run(&scene).expect("run");
+    let points: Vec<Vector3<Real>> = result
+        .samples
+        .positions
+        .iter()
+        .map(|p| Vector3::from(*p))
+        .collect();
+    let length: Real = points.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let gamma = length / scene.rod.rest_length;
+    let ea = scene.rod.stretch_stiffness;
+    // Green–Lagrange: the axial force at stretch γ is EA γ (γ² − 1) / 2.
+    let tension = ea * gamma * (gamma * gamma - 1.0) / 2.0;
+    let forces: Vec<Vector3<Real>> = result
+        .obstacle_forces
+        .iter()
+        .map(|f| Vector3::from(*f))
+        .collect();
+    let reach = points.iter().map(|p| p.x.abs()).fold(0.0, Real::max);
+    println!(
+        "band: stretch {gamma:.4}, tension {tension:.4} N; peg forces {:.4} and {:.4} N; reaches x = ±{reach:.5} m",
+        forces[0].norm(),
+        forces[1].norm()
+    );
+    // Around both pegs (axes at ±0.1 m, radius 1 cm, band radius 2 mm).
+    assert!((reach - 0.112).abs() < 1e-3, "{reach}");
+    for f in &forces {
+        assert!(
+            (f.norm() / (2.0 * tension) - 1.0).abs() < 0.03,
+            "{f:?} against 2 × {tension}"
+        );
+        assert!(
+            f.x.abs() > 0.999 * f.norm(),
+            "the pegs are pulled towards each other"
+        );
+    }
+}
