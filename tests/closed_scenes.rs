@@ -225,3 +225,26 @@ fn a_rubber_band_on_two_pegs_pulls_each_with_twice_its_tension() {
         );
     }
 }
+
+#[test]
+fn a_loop_pulled_flat_keeps_its_strands_apart() {
+    let scene = Scene::load("scenes/loop_pulled.toml").expect("scene");
+    let result = run(&scene).expect("run");
+    let r = scene.rod.radius.expect("radius");
+    let contact = result.contact.as_ref().expect("contact statistics");
+    let clearance = contact.min_clearance_ratio.expect("self-contact happened");
+    let p = |k: usize| Vector3::from(result.probes[k].positions.last().copied().expect("probe"));
+    let (a, b) = (p(0), p(1));
+    println!(
+        "loop: clearance {clearance:.4}; strand midpoints {:.5} m apart, mirror error {:.1e} m",
+        (a - b).norm(),
+        (a.x + b.x).abs() + (a.y - b.y).abs()
+    );
+    assert!(clearance >= 0.85, "{clearance}");
+    assert!(
+        (a - b).norm() >= 2.0 * r,
+        "the strands are side by side, not crossed"
+    );
+    // The seam (s = 0, probe 0) is on one strand: the loop stays symmetric regardless.
+    assert!((a.x + b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9);
+}
