@@ -80,3 +80,40 @@ fn knot_insertion_barely_changes_the_twist_of_a_resolved_rod() {
         "{before} → {after}"
     );
 }
+
+/// The twist of a closed rod: the conformance harness runs it on the closed test rods
+/// (it refuses open ones), including the coupling across the seam.
+#[test]
+fn the_twist_of_a_loop_passes_the_conformance_harness() {
+    use splinerod_core::PeriodicBSplineSpace;
+    let material = Material {
+        rest_length: 1.3,
+        linear_density: 0.2,
+    };
+    let space = PeriodicBSplineSpace::uniform(3, 10, 1.3).unwrap();
+    let ring = Rod::ring(
+        material,
+        Box::new(space),
+        Vector3::zeros(),
+        Vector3::z(),
+        0.2,
+    )
+    .unwrap();
+    let twisting = Twisting::around_loop(0.7, &ring, 0.4).unwrap();
+    assert!(twisting.supports(&straight(8, 3)).is_err());
+    let report = check_energy(
+        &twisting,
+        Expectations {
+            zero_at_rest: false,
+            rigid: RigidInvariance::Full,
+            // The sampling error of the holonomy on the harness's coarse rings (8 control
+            // points of degree 3 around a wiggled loop): measured 8.2e-2.
+            knot_insertion: 0.1,
+        },
+    )
+    .unwrap();
+    println!("{report:?}");
+    // A planar ring keeps the twist it was given: Tw = Φ, E = GJ Φ² / (2L).
+    let e = twisting.energy(&ring);
+    assert!((e - 0.7 * 0.16 / 2.6).abs() < 1e-12, "{e}");
+}

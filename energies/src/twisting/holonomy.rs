@@ -155,8 +155,11 @@ impl Samples {
             }
             at(0.5 * (span.start + span.end), &mut self.rows);
         }
-        coarse.push(self.rows.len());
-        at(end, &mut self.rows);
+        // A closed rod's end is its start: its polygons close on themselves.
+        if !rod.is_closed() {
+            coarse.push(self.rows.len());
+            at(end, &mut self.rows);
+        }
         self.polygons[FINE].extend(0..self.rows.len());
         let rows = &self.rows;
         self.bandwidth = self.polygons.iter().fold(d, |width, polygon| {

@@ -38,6 +38,7 @@
 //! `d + 1`, the twist is released and the energy is zero from then on. (Evaluated on a
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
+mod closed;
 pub mod holonomy;
 mod window;
 
@@ -122,6 +123,9 @@ pub struct Twisting {
     schedules: [Option<Keyframes<Real>>; 2],
     /// The tangent samples (rows cached per basis, tangents per call).
     samples: Mutex<Samples>,
+    /// Whether this is the twist of a closed rod ([`Twisting::around_loop`]): the
+    /// polygons close on themselves and there are no clamps.
+    closed: bool,
 }
 
 impl Clone for Twisting {
@@ -136,6 +140,7 @@ impl Clone for Twisting {
             released: self.released,
             schedules: self.schedules.clone(),
             samples: Mutex::default(),
+            closed: self.closed,
         }
     }
 }
@@ -169,6 +174,7 @@ impl Twisting {
             released: false,
             schedules: [None, None],
             samples: Mutex::default(),
+            closed: false,
         };
         let raw = {
             let samples = twisting.prepared(rod);
@@ -238,6 +244,9 @@ impl Twisting {
 
     /// ψ of polygon `p`, in (−π, π].
     fn raw_holonomy(&self, samples: &Samples, p: usize) -> Real {
+        if self.closed {
+            return closed::loop_holonomy(samples, p);
+        }
         let director = transported(samples, p, &self.start, &self.end.axis);
         signed_angle(&director, &self.end.director, &self.end.axis)
     }
@@ -245,6 +254,10 @@ impl Twisting {
     /// The tangents before and after vertex `j` of polygon `p`.
     fn neighbours(&self, samples: &Samples, p: usize, j: usize) -> (Vector3<Real>, Vector3<Real>) {
         let (t, polygon) = (&samples.t, &samples.polygons[p]);
+        if self.closed {
+            let n = polygon.len();
+            return (t[polygon[(j + n - 1) % n]], t[polygon[(j + 1) % n]]);
+        }
         let previous = if j == 0 {
             self.start.axis
         } else {
@@ -293,7 +306,8 @@ impl Twisting {
                 let diagonal = (diagonal + diagonal.transpose()) * (0.5 * c);
                 let row = &samples.rows[k];
                 window.add(hessian, row, None, &diagonal);
-                if let Some(&n) = polygon.get(j + 1) {
+                let wrap = self.closed.then(|| polygon[0]);
+                if let Some(n) = polygon.get(j + 1).copied().or(wrap) {
                     let tn = &samples.t[n];
                     let pn = Matrix3::identity() - tn * tn.transpose();
                     let off = ky_next * pn * (0.5 * c / (norm * samples.norm[n]));
@@ -421,13 +435,18 @@ impl Energy for Twisting {
     }
 
     fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
-        match rod.is_closed() {
-            true => Err(CoreError::InvalidParameter {
+        match (rod.is_closed(), self.closed) {
+            (true, false) => Err(CoreError::InvalidParameter {
                 name: "twist",
                 value: 0.0,
                 reason: "twisting between two clamps needs an open rod (closed rods have no ends)",
             }),
-            false => Ok(()),
+            (false, true) => Err(CoreError::InvalidParameter {
+                name: "twist",
+                value: 0.0,
+                reason: "the twist of a loop needs a closed rod",
+            }),
+            _ => Ok(()),
         }
     }
 

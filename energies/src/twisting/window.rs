@@ -96,7 +96,8 @@ fn add_direct(hessian: &mut BlockBanded, a: &Row, b: Option<&Row>, h: &Matrix3<f
             if !same && row == col {
                 hessian.add_block(row, col, &((h + h.transpose()) * w));
             } else {
-                hessian.add_block(row, col, &(h * w));
+                // A closed rod's last and first samples couple across the seam.
+                hessian.add_coupling(row, col, &(h * w));
             }
         }
     }
