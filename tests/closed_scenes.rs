@@ -138,8 +138,18 @@ fn bad_closed_rods_are_named() {
     assert_field(&rejected(&consistent), "rod.stretch_formulation");
     let clamp = with_line_in(&closed, "[[pins]]", "clamp = true");
     assert_field(&rejected(&clamp), "pins[0].clamp");
+    // A twisted loop needs bending; an open rod cannot start twisted.
     let twist = with_line_in(&closed, "[rod]", "twist_stiffness = 1e-4");
-    assert_field(&rejected(&twist), "rod.twist_stiffness");
+    accepted(&twist);
+    let unbent = without_in(
+        &with_line_in(&closed, "[rod]", "twist_stiffness = 1e-4"),
+        "bending_stiffness",
+    );
+    assert_field(&rejected(&unbent), "rod.twist_stiffness");
+    let loose = with_line_in(&closed, "[rod]", "twist = 1.0");
+    assert_field(&rejected(&loose), "rod.twist");
+    let open = "[rod]\nrest_length = 1.0\nlinear_density = 0.1\nstretch_stiffness = 10.0\nbending_stiffness = 1e-3\ntwist_stiffness = 1e-3\ntwist = 1.0\ncontrol_points = 8\n[[pins]]\nat = 0.0\nclamp = true\n[[pins]]\nat = 1.0\nclamp = true\n[solver]\nmethod = \"static\"\n";
+    assert_field(&rejected(open), "rod.twist");
     // Explicit periodic breakpoints: control_points + 1 of them.
     let knots: Vec<String> = (0..=16).map(|k| format!("{}", k as f64)).collect();
     accepted(&with_line_in(
@@ -247,4 +257,25 @@ fn a_loop_pulled_flat_keeps_its_strands_apart() {
     );
     // The seam (s = 0, probe 0) is on one strand: the loop stays symmetric regardless.
     assert!((a.x + b.x).abs() < 1e-9 && (a.y - b.y).abs() < 1e-9);
+}
+
+#[test]
+fn the_michell_ring_folds_into_a_figure_eight_keeping_its_link() {
+    let scene = Scene::load("scenes/michell_ring.toml").expect("scene");
+    let result = run(&scene).expect("run");
+    let twist = result.twist.as_ref().expect("twist output");
+    let contact = result.contact.as_ref().expect("contact statistics");
+    let turns = scene.rod.twist.expect("twist") / std::f64::consts::TAU;
+    println!(
+        "michell ring: twist {:.4} turns, writhe {:.4}, link {:.5} (started {turns}); clearance {:?}",
+        twist.twist / std::f64::consts::TAU,
+        twist.writhe,
+        twist.link,
+        contact.min_clearance_ratio
+    );
+    // Buckled out of plane (a planar loop has no writhe), through writhe ≈ 1.
+    assert!(twist.writhe > 0.8, "{}", twist.writhe);
+    // Călugăreanu: the link is kept (the writhe is sampled: 401 points).
+    assert!((twist.link - turns).abs() < 2e-3, "{}", twist.link);
+    assert!(contact.min_clearance_ratio.unwrap_or(1.0) > 0.85);
 }

@@ -5,9 +5,9 @@
 //! planar equilibrium stops being positive on the motions that are not rigid.
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use splinerod::core::{BlockBanded, HessianKind};
 use splinerod::energies::Twisting;
 use splinerod::prelude::*;
-use splinerod::core::{BlockBanded, HessianKind};
 use std::f64::consts::{PI, TAU};
 
 const R0: Real = 0.1;
@@ -20,7 +20,14 @@ fn ring(m: usize, radius: Real) -> Rod {
         linear_density: 0.05,
     };
     let space = PeriodicBSplineSpace::uniform(3, m, material.rest_length).expect("space");
-    Rod::ring(material, Box::new(space), Vector3::zeros(), Vector3::z(), radius).expect("ring")
+    Rod::ring(
+        material,
+        Box::new(space),
+        Vector3::zeros(),
+        Vector3::z(),
+        radius,
+    )
+    .expect("ring")
 }
 
 fn energies(rod: &Rod, torsion: Real, twist: Real) -> Vec<Box<dyn Energy>> {
@@ -36,7 +43,10 @@ fn energies(rod: &Rod, torsion: Real, twist: Real) -> Vec<Box<dyn Energy>> {
 fn planar_equilibrium(m: usize) -> Rod {
     let energy = |r: Real| {
         let rod = ring(m, r);
-        energies(&rod, 1.0, 0.0).iter().map(|e| e.energy(&rod)).sum::<Real>()
+        energies(&rod, 1.0, 0.0)
+            .iter()
+            .map(|e| e.energy(&rod))
+            .sum::<Real>()
     };
     let (mut a, mut b) = (0.99 * R0, 1.01 * R0);
     let g = (5.0_f64.sqrt() - 1.0) / 2.0;
@@ -71,12 +81,17 @@ fn softest_mode(rod: &Rod, torsion: Real, twist: Real) -> Real {
     // Rigid motions: three translations, three rotations about the centroid.
     let centre = rod.positions[..m].iter().sum::<Vector3<Real>>() / m as Real;
     let axes = [Vector3::x(), Vector3::y(), Vector3::z()];
-    let rigid = axes.iter().map(|&t| DVector::from_iterator(3 * m, (0..m).flat_map(|_| [t.x, t.y, t.z])));
+    let rigid = axes
+        .iter()
+        .map(|&t| DVector::from_iterator(3 * m, (0..m).flat_map(|_| [t.x, t.y, t.z])));
     let turns = axes.iter().map(|w| {
-        DVector::from_iterator(3 * m, (0..m).flat_map(|i| {
-            let v = w.cross(&(rod.positions[i] - centre));
-            [v.x, v.y, v.z]
-        }))
+        DVector::from_iterator(
+            3 * m,
+            (0..m).flat_map(|i| {
+                let v = w.cross(&(rod.positions[i] - centre));
+                [v.x, v.y, v.z]
+            }),
+        )
     });
     let basis = DMatrix::from_columns(&rigid.chain(turns).collect::<Vec<_>>());
     let q = basis.qr().q();
@@ -92,8 +107,14 @@ fn a_twisted_ring_buckles_at_michells_threshold() {
         let exact = 2.0 * PI * 3.0_f64.sqrt() * BENDING / torsion;
         for m in [8, 16, 32, 64] {
             let rod = planar_equilibrium(m);
-            assert!(softest_mode(&rod, torsion, 0.5 * exact) > 0.0, "stable well below");
-            assert!(softest_mode(&rod, torsion, 1.5 * exact) < 0.0, "unstable well above");
+            assert!(
+                softest_mode(&rod, torsion, 0.5 * exact) > 0.0,
+                "stable well below"
+            );
+            assert!(
+                softest_mode(&rod, torsion, 1.5 * exact) < 0.0,
+                "unstable well above"
+            );
             let (mut lo, mut hi) = (0.5 * exact, 1.5 * exact);
             while hi - lo > 1e-5 * exact {
                 let mid = 0.5 * (lo + hi);

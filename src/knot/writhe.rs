@@ -8,7 +8,8 @@
 //! writhe of the polyline is the exact double sum of Klenin & Langowski (2000):
 //! \\(\mathrm{Wr} = \tfrac{1}{2\pi}\sum_{i<j} \Omega_{ij}\\), with \\(\Omega_{ij}\\)
 //! the signed solid angle segment `j` subtends seen from all points of segment `i`.
-//! O(N²) in the samples: an analysis at output time, never in a step.
+//! O(N²) in the samples: an analysis at output time, never in a step. A closed rod's
+//! polyline closes on itself, with no extensions.
 
 use crate::Error;
 use nalgebra::Vector3;
@@ -21,6 +22,13 @@ pub const EXTENSION: Real = 1e3;
 /// `axes` (unit tangents of the start and end clamps).
 pub fn writhe(rod: &Rod, samples: usize, axes: [Vector3<Real>; 2]) -> Result<Real, Error> {
     let l = rod.material().rest_length;
+    if rod.is_closed() {
+        // A closed rod needs no closure: its own polyline, back to the start.
+        let points: Vec<Vector3<Real>> = (0..samples)
+            .map(|k| rod.point(l * k as Real / samples as Real))
+            .collect::<Result<_, _>>()?;
+        return Ok(closed_polyline_writhe(&points));
+    }
     let mut points = Vec::with_capacity(samples + 2);
     let start = rod.point(0.0)?;
     points.push(start - axes[0] * (EXTENSION * l));
@@ -39,6 +47,21 @@ pub fn polyline_writhe(points: &[Vector3<Real>]) -> Real {
     for i in 0..segments {
         for j in i + 2..segments {
             sum += solid_angle(points[i], points[i + 1], points[j], points[j + 1]);
+        }
+    }
+    sum / (2.0 * std::f64::consts::PI)
+}
+
+/// Writhe of the closed polyline through `points` and back to the first (turns).
+pub fn closed_polyline_writhe(points: &[Vector3<Real>]) -> Real {
+    let n = points.len();
+    let segment = |i: usize| (points[i], points[(i + 1) % n]);
+    let mut sum = 0.0;
+    for i in 0..n {
+        // Not with itself nor its neighbours (around the loop: the last and the first).
+        for j in i + 2..n - usize::from(i == 0) {
+            let ((p1, p2), (p3, p4)) = (segment(i), segment(j));
+            sum += solid_angle(p1, p2, p3, p4);
         }
     }
     sum / (2.0 * std::f64::consts::PI)

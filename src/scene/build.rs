@@ -224,8 +224,13 @@ impl Scene {
     }
 
     /// The twisting energy of `rod.twist_stiffness` between the end clamps, with their
-    /// `turn` schedules; the start frame's axis is the rod's tangent there as it starts.
+    /// `turn` schedules (the start frame's axis is the rod's tangent there as it
+    /// starts), or around a closed rod, which starts with the total twist `rod.twist`.
     fn twisting(&self, rod: &Rod) -> Result<Option<Twisting>, Error> {
+        if let (Some(gj), true) = (self.rod.twist_stiffness, self.closed()) {
+            let twist = self.rod.twist.unwrap_or(0.0);
+            return Ok(Some(Twisting::around_loop(gj, rod, twist)?));
+        }
         let (Some(gj), [Some(first), Some(last)]) = (self.rod.twist_stiffness, self.twist_clamps())
         else {
             return Ok(None);

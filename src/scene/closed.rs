@@ -12,7 +12,8 @@
 //! normal = [0.0, 0.0, 1.0]
 //! ```
 //!
-//! The knots are periodic: `"uniform"` (the default for a closed rod) or an explicit list
+//! `twist_stiffness` with `twist` (rad) gives a closed rod the twist of a loop
+//! ([`splinerod_energies::Twisting::around_loop`]). The knots are periodic: `"uniform"` (the default for a closed rod) or an explicit list
 //! of `control_points + 1` breakpoints, the first being the seam and the last one period
 //! after it (any units: mapped to `[0, L]`).
 
@@ -82,10 +83,6 @@ impl Scene {
             }
             (Some(ring), None) => validate_ring(ring)?,
             (None, Some(_)) => {}
-        }
-        if let Some(gj) = r.twist_stiffness {
-            let reason = "twisting between two clamps needs an open rod";
-            return refuse("rod.twist_stiffness", format!("{gj}"), reason);
         }
         if r.stretch_formulation == StretchFormulationSpec::MixedConsistent {
             let reason = "mixed-consistent does not support closed rods yet (use \"mixed\")";

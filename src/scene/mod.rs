@@ -101,20 +101,23 @@ pub struct RodSpec {
     /// Mass per unit rest length, kg/m (> 0).
     pub linear_density: f64,
     /// Axial stiffness `EA = Y·r`, N (> 0), or `"inextensible"` (read as `+∞`).
-    #[serde(deserialize_with = "stiffness_or_inextensible")]
+    #[serde(deserialize_with = "shape::stiffness_or_inextensible")]
     pub stretch_stiffness: f64,
     /// Bending stiffness `EI`, N·m² (> 0; needs degree ≥ 2). Default: no bending energy.
     pub bending_stiffness: Option<f64>,
     /// Torsional stiffness `GJ`, N·m² (> 0; needs clamps at both ends and
     /// `bending_stiffness`). Default: no twisting energy.
     pub twist_stiffness: Option<f64>,
+    /// Total twist a closed rod starts with, rad (needs `twist_stiffness`; an open rod is
+    /// twisted by turning its clamps). Default 0.
+    pub twist: Option<f64>,
     /// Mass-proportional damping, 1/s (≥ 0). Default 0.
     #[serde(default)]
     pub damping: f64,
     /// Number of control points (≥ degree + 1).
     pub control_points: usize,
     /// Polynomial degree, 1 to 9. Default 3.
-    #[serde(default = "default_degree")]
+    #[serde(default = "shape::default_degree")]
     pub degree: usize,
     /// `"clamped"` (default), `"uniform"`, or an explicit non-decreasing knot vector of
     /// `control_points + degree + 1` values (any units; the domain is mapped to `[0, L]`).
@@ -151,30 +154,6 @@ impl RodSpec {
     pub fn knot_layout(&self) -> KnotsSpec {
         self.knots.clone().unwrap_or_default()
     }
-}
-
-/// `rod.stretch_stiffness`: a number, or the string `"inextensible"` as `+∞`.
-fn stiffness_or_inextensible<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum Given {
-        Number(f64),
-        Word(String),
-    }
-    match Given::deserialize(d)? {
-        Given::Number(x) if x.is_infinite() => Err(serde::de::Error::custom(format!(
-            "rod.stretch_stiffness = {x}: must be finite and positive (or \"inextensible\")"
-        ))),
-        Given::Number(x) => Ok(x),
-        Given::Word(w) if w == "inextensible" => Ok(f64::INFINITY),
-        Given::Word(w) => Err(serde::de::Error::custom(format!(
-            "rod.stretch_stiffness: expected a number (N) or \"inextensible\", got \"{w}\""
-        ))),
-    }
-}
-
-fn default_degree() -> usize {
-    3
 }
 
 /// `rod.knots`: a named layout or an explicit vector.

@@ -98,12 +98,39 @@ impl Scene {
         self.validate_twist()
     }
 
-    /// `rod.twist_stiffness` needs bending and clamps at both ends.
+    /// `rod.twist_stiffness` needs bending and, on an open rod, clamps at both ends;
+    /// `rod.twist` a closed rod.
     fn validate_twist(&self) -> Result<(), Error> {
+        if let (Some(twist), false) = (self.rod.twist, self.closed()) {
+            let reason = "only a closed rod starts twisted; an open one is twisted by turning its clamps (pins[].turn)";
+            return Err(Error::field("rod.twist", twist, reason));
+        }
         let Some(gj) = self.rod.twist_stiffness else {
+            if let Some(twist) = self.rod.twist {
+                return Err(Error::field(
+                    "rod.twist",
+                    twist,
+                    "needs rod.twist_stiffness",
+                ));
+            }
             return Ok(());
         };
         crate::scene::positive("rod.twist_stiffness", gj)?;
+        if let Some(twist) = self.rod.twist {
+            if !twist.is_finite() {
+                return Err(Error::field("rod.twist", twist, "must be finite"));
+            }
+        }
+        if self.closed() {
+            return match self.rod.bending_stiffness {
+                Some(_) => Ok(()),
+                None => Err(Error::field(
+                    "rod.twist_stiffness",
+                    gj,
+                    "a twisted loop needs rod.bending_stiffness",
+                )),
+            };
+        }
         if self.twist_clamps().iter().any(Option::is_none) {
             let reason = "twist needs clamps at both ends ([[pins]] at = 0 and at = 1 with \
                           clamp = true): a rod with a free end carries no twist";

@@ -40,6 +40,7 @@ impl RodSpec {
             stretch_stiffness: 0.0,
             bending_stiffness: None,
             twist_stiffness: None,
+            twist: None,
             damping: 0.0,
             control_points: 0,
             degree: 3,

@@ -115,3 +115,29 @@ impl Scene {
         Ok(())
     }
 }
+
+/// `rod.stretch_stiffness`: a number, or the string `"inextensible"` as `+∞`.
+pub(crate) fn stiffness_or_inextensible<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<f64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Given {
+        Number(f64),
+        Word(String),
+    }
+    match Given::deserialize(d)? {
+        Given::Number(x) if x.is_infinite() => Err(serde::de::Error::custom(format!(
+            "rod.stretch_stiffness = {x}: must be finite and positive (or \"inextensible\")"
+        ))),
+        Given::Number(x) => Ok(x),
+        Given::Word(w) if w == "inextensible" => Ok(f64::INFINITY),
+        Given::Word(w) => Err(serde::de::Error::custom(format!(
+            "rod.stretch_stiffness: expected a number (N) or \"inextensible\", got \"{w}\""
+        ))),
+    }
+}
+
+pub(crate) fn default_degree() -> usize {
+    3
+}
