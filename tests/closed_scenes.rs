@@ -279,3 +279,21 @@ fn the_michell_ring_folds_into_a_figure_eight_keeping_its_link() {
     assert!((twist.link - turns).abs() < 2e-3, "{}", twist.link);
     assert!(contact.min_clearance_ratio.unwrap_or(1.0) > 0.85);
 }
+
+#[test]
+fn rings_run_in_ensembles_and_write_paraview_files() {
+    let ensemble = format!("{RING}\n[ensemble]\ncount = 4\nseed = 3\nstretch_stiffness = [30.0, 80.0]\nperturbation = 0.005\n");
+    let result = run(&accepted(&ensemble)).expect("ensemble");
+    assert_eq!(result.ensemble.len(), 4);
+    assert!(result.ensemble.iter().all(|m| m.control_points == 16));
+    let dir = std::env::temp_dir().join(format!("splinerod-closed-vtk-{}", std::process::id()));
+    let mut vtk = splinerod::output::vtk::VtkWriter::new(&dir, 50).expect("writer");
+    let scene = accepted(RING);
+    splinerod::run_observed(&scene, &mut [&mut vtk]).expect("run with VTK");
+    let frames = std::fs::read_dir(&dir).expect("dir").filter(|e| {
+        e.as_ref()
+            .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "vtp"))
+    });
+    assert!(frames.count() >= 3);
+    std::fs::remove_dir_all(&dir).expect("cleanup");
+}

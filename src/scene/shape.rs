@@ -2,7 +2,7 @@
 //! `rod.rest_shape` and the `[rod.overhand]` knot, which sets the rest length and the
 //! control points before validation.
 
-use crate::scene::Scene;
+use crate::scene::{KnotsSpec, Scene};
 use crate::Error;
 use serde::Deserialize;
 
@@ -82,7 +82,11 @@ impl Scene {
             ),
             ("rod.start", r.start.is_some()),
             ("rod.end", r.end.is_some()),
-            ("rod.knots", r.knots.is_some()),
+            // The default knots spelled out are no conflict.
+            (
+                "rod.knots",
+                r.knots.as_ref().is_some_and(|k| *k != KnotsSpec::default()),
+            ),
             ("rod.closed", r.closed || r.ring.is_some()),
         ];
         if let Some((field, _)) = given.iter().find(|g| g.1) {
