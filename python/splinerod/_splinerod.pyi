@@ -7,7 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver']
+__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver']
 
 _ArrayLike = npt.ArrayLike
 _Points = npt.NDArray[np.float64]
@@ -125,13 +125,41 @@ class BSplineSpace:
     def knots(self) -> _Points: ...
 
 @final
+class PeriodicBSplineSpace:
+    """A periodic B-spline basis for closed rods (no seam)."""
+
+    def __new__(cls, degree: int, breaks: Sequence[float], period: float) -> "PeriodicBSplineSpace": ...
+    @staticmethod
+    def uniform(degree: int, control_points: int, period: float) -> "PeriodicBSplineSpace": ...
+    @property
+    def degree(self) -> int: ...
+    @property
+    def count(self) -> int: ...
+    @property
+    def period(self) -> float: ...
+    @property
+    def breaks(self) -> _Points: ...
+
+@final
 class Rod:
     """A B-spline rod: control points, material, damping."""
 
     damping: float
-    def __new__(cls, material: Material, basis: BSplineSpace, control_points: _ArrayLike) -> "Rod": ...
+    def __new__(
+        cls, material: Material, basis: BSplineSpace | PeriodicBSplineSpace, control_points: _ArrayLike
+    ) -> "Rod": ...
     @staticmethod
     def straight(material: Material, basis: BSplineSpace, start: _ArrayLike, end: _ArrayLike) -> "Rod": ...
+    @staticmethod
+    def ring(
+        material: Material,
+        basis: PeriodicBSplineSpace,
+        radius: float,
+        center: _ArrayLike | None = None,
+        normal: _ArrayLike | None = None,
+    ) -> "Rod": ...
+    @property
+    def closed(self) -> bool: ...
     @property
     def control_points(self) -> _Points: ...
     @property

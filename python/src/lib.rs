@@ -29,6 +29,7 @@ fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulation::Simulation>()?;
     m.add_class::<model::Material>()?;
     m.add_class::<model::BSplineSpace>()?;
+    m.add_class::<model::PeriodicBSplineSpace>()?;
     m.add_class::<model::Rod>()?;
     m.add_class::<model::Pin>()?;
     m.add_class::<system::RodSystem>()?;

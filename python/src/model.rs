@@ -108,6 +108,89 @@ impl BSplineSpace {
     }
 }
 
+/// A periodic B-spline basis for closed rods: `count` distinct functions around a loop
+/// of `period` (the rod's rest length), no seam.
+#[pyclass(module = "splinerod", frozen)]
+#[derive(Clone)]
+pub struct PeriodicBSplineSpace {
+    /// The Rust basis.
+    pub inner: splinerod::PeriodicBSplineSpace,
+}
+
+#[pymethods]
+impl PeriodicBSplineSpace {
+    /// A basis of `degree` with the breakpoints of one period (`breaks[0] = 0`, then
+    /// non-decreasing values below `period`): one control point per breakpoint.
+    #[new]
+    fn new(py: Python<'_>, degree: usize, breaks: Vec<Real>, period: Real) -> PyResult<Self> {
+        let inner = splinerod::PeriodicBSplineSpace::new(degree, breaks, period).py_err(py)?;
+        Ok(Self { inner })
+    }
+
+    /// `control_points` functions of `degree` on evenly spaced breakpoints around a loop
+    /// of `period`.
+    #[staticmethod]
+    fn uniform(
+        py: Python<'_>,
+        degree: usize,
+        control_points: usize,
+        period: Real,
+    ) -> PyResult<Self> {
+        let inner =
+            splinerod::PeriodicBSplineSpace::uniform(degree, control_points, period).py_err(py)?;
+        Ok(Self { inner })
+    }
+
+    /// The degree.
+    #[getter]
+    fn degree(&self) -> usize {
+        self.inner.degree()
+    }
+
+    /// The number of distinct control points.
+    #[getter]
+    fn count(&self) -> usize {
+        self.inner.breaks().len()
+    }
+
+    /// The period (the rest length of a closed rod on this basis), m.
+    #[getter]
+    fn period(&self) -> Real {
+        self.inner.period()
+    }
+
+    /// The breakpoints of one period, m.
+    #[getter]
+    fn breaks<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<Real>> {
+        values_array(py, self.inner.breaks().to_vec())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "PeriodicBSplineSpace(degree={}, control_points={}, period={})",
+            self.inner.degree(),
+            self.inner.breaks().len(),
+            self.inner.period()
+        )
+    }
+}
+
+/// The Rust basis of a Python `BSplineSpace` or `PeriodicBSplineSpace`.
+fn basis_from(basis: &Bound<'_, PyAny>) -> PyResult<Box<dyn splinerod::BasisSpace>> {
+    if let Ok(b) = basis.cast::<BSplineSpace>() {
+        return Ok(Box::new(b.get().inner.clone()));
+    }
+    if let Ok(b) = basis.cast::<PeriodicBSplineSpace>() {
+        return Ok(Box::new(b.get().inner.clone()));
+    }
+    let message = "`basis` must be a BSplineSpace or a PeriodicBSplineSpace";
+    Err(crate::errors::scene_error(
+        basis.py(),
+        Some("basis"),
+        message.to_string(),
+    ))
+}
+
 /// A rod: a B-spline curve whose control points are the degrees of freedom, with its
 /// material and (mass-proportional) damping.
 #[pyclass(module = "splinerod")]
@@ -119,17 +202,22 @@ pub struct Rod {
 
 #[pymethods]
 impl Rod {
-    /// A rod of `material` on `basis` with the given `(n, 3)` control points.
+    /// A rod of `material` on `basis` with the given `(n, 3)` control points; on a
+    /// `PeriodicBSplineSpace` a closed rod, with its `basis.count` distinct control
+    /// points (the curve wraps from the last back to the first).
     #[new]
     fn new(
         material: &Material,
-        basis: &BSplineSpace,
+        basis: &Bound<'_, PyAny>,
         control_points: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
         let py = control_points.py();
-        let n = basis.inner.count();
-        let points = points_from(control_points, "control_points", Some(n))?;
-        let rod = splinerod::Rod::new(material.rust(), Box::new(basis.inner.clone()), points);
+        let basis = basis_from(basis)?;
+        let distinct = basis.periodic_count().unwrap_or(basis.count());
+        let mut points = points_from(control_points, "control_points", Some(distinct))?;
+        // A closed rod stores the first `degree` points again after the last.
+        points.extend_from_within(..basis.count() - distinct);
+        let rod = splinerod::Rod::new(material.rust(), basis, points);
         Ok(Self {
             inner: rod.py_err(py)?,
         })
@@ -152,6 +240,38 @@ impl Rod {
         })
     }
 
+    /// A closed rod on `basis` fitted to the circle of `radius` (m) about `center` in
+    /// the plane normal to `normal` (at rest when 2π · radius is the rest length).
+    #[staticmethod]
+    #[pyo3(signature = (material, basis, radius, center=None, normal=None))]
+    fn ring(
+        py: Python<'_>,
+        material: &Material,
+        basis: &PeriodicBSplineSpace,
+        radius: Real,
+        center: Option<&Bound<'_, PyAny>>,
+        normal: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let center = center.map_or(Ok(nalgebra::Vector3::zeros()), |c| vector_from(c, "center"))?;
+        let normal = normal.map_or(Ok(nalgebra::Vector3::z()), |n| vector_from(n, "normal"))?;
+        let rod = splinerod::Rod::ring(
+            material.rust(),
+            Box::new(basis.inner.clone()),
+            center,
+            normal,
+            radius,
+        );
+        Ok(Self {
+            inner: rod.py_err(py)?,
+        })
+    }
+
+    /// Whether the rod is closed (on a `PeriodicBSplineSpace`).
+    #[getter]
+    fn closed(&self) -> bool {
+        self.inner.is_closed()
+    }
+
     /// Mass-proportional damping, 1/s.
     #[getter]
     fn damping(&self) -> Real {
@@ -168,10 +288,10 @@ impl Rod {
         Ok(())
     }
 
-    /// The control points, `(n, 3)`, m.
+    /// The control points, `(n, 3)`, m (a closed rod's distinct ones).
     #[getter]
     fn control_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        points_array(py, &self.inner.positions)
+        points_array(py, &self.inner.positions[..self.inner.distinct_len()])
     }
 
     /// The knot vector, m.
@@ -180,18 +300,23 @@ impl Rod {
         values_array(py, self.inner.basis().knots().to_vec())
     }
 
-    /// The number of control points.
+    /// The number of (distinct) control points.
     fn __len__(&self) -> usize {
-        self.inner.len()
+        self.inner.distinct_len()
     }
 
     fn __repr__(&self) -> String {
         let m = self.inner.material();
         format!(
-            "Rod(control_points={}, degree={}, rest_length={})",
-            self.inner.len(),
+            "Rod(control_points={}, degree={}, rest_length={}{})",
+            self.inner.distinct_len(),
             self.inner.basis().degree(),
-            m.rest_length
+            m.rest_length,
+            if self.inner.is_closed() {
+                ", closed"
+            } else {
+                ""
+            }
         )
     }
 }

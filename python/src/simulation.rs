@@ -226,16 +226,18 @@ impl Simulation {
         self.driver.sims().len()
     }
 
-    /// Member 0's control points, `(n, 3)`, m.
+    /// Member 0's control points, `(n, 3)`, m (a closed rod's distinct ones).
     #[getter]
     fn control_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        points_array(py, &self.driver.sims()[0].system.rod.positions)
+        let rod = &self.driver.sims()[0].system.rod;
+        points_array(py, distinct(rod, &rod.positions))
     }
 
     /// Member 0's control-point velocities, `(n, 3)`, m/s; settable.
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        points_array(py, &self.driver.sims()[0].system.rod.velocities)
+        let rod = &self.driver.sims()[0].system.rod;
+        points_array(py, distinct(rod, &rod.velocities))
     }
 
     #[setter(velocities)]
@@ -255,8 +257,11 @@ impl Simulation {
         let members = self.selected(py, member)?;
         // Every member's array checked before any is set: all or nothing.
         let checked = members.clone().map(|i| {
-            let n = self.driver.sims()[i].system.rod.len();
-            points_from(velocities, "velocities", Some(n))
+            let rod = &self.driver.sims()[i].system.rod;
+            let mut v = points_from(velocities, "velocities", Some(rod.distinct_len()))?;
+            // A closed rod's copies across the seam move with what they copy.
+            v.extend_from_within(..rod.len() - rod.distinct_len());
+            Ok(v)
         });
         let checked = checked.collect::<PyResult<Vec<_>>>()?;
         for (i, v) in members.zip(checked) {
@@ -381,7 +386,7 @@ impl Simulation {
         let sims = self.driver.sims();
         let all: Vec<_> = sims
             .iter()
-            .map(|s| s.system.rod.positions.clone())
+            .map(|s| distinct(&s.system.rod, &s.system.rod.positions).to_vec())
             .collect();
         if all.iter().any(|p| p.len() != all[0].len()) {
             let message = "the members have different numbers of control points (adaptivity); read them one by one with member_control_points(i)";
@@ -396,10 +401,8 @@ impl Simulation {
         py: Python<'py>,
         member: usize,
     ) -> PyResult<Bound<'py, PyArray2<Real>>> {
-        Ok(points_array(
-            py,
-            &self.member(py, member)?.system.rod.positions,
-        ))
+        let rod = &self.member(py, member)?.system.rod;
+        Ok(points_array(py, distinct(rod, &rod.positions)))
     }
 
     /// Energies of every member: a dict of arrays of length `members`, J.
@@ -467,4 +470,10 @@ fn points_at(
                 .map_err(|e| scene_error(py, Some("s"), e.to_string()))
         })
         .collect()
+}
+
+/// The entries of a per-control-point field that belong to distinct control points (a
+/// closed rod's copies across the seam left out).
+fn distinct<'a, T>(rod: &splinerod::Rod, field: &'a [T]) -> &'a [T] {
+    &field[..rod.distinct_len()]
 }
