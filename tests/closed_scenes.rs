@@ -297,3 +297,31 @@ fn rings_run_in_ensembles_and_write_paraview_files() {
     assert!(frames.count() >= 3);
     std::fs::remove_dir_all(&dir).expect("cleanup");
 }
+
+#[test]
+fn the_command_line_refuses_bad_closed_rods_with_exit_2() {
+    let dir = common::cli::fresh_dir("closed-bad");
+    for (edit, field) in [
+        (("radius = 0.08", "radius = 0.0"), "rod.ring.radius"),
+        (
+            ("normal = [0.0, 0.94, 0.342]", "normal = [0.0, 0.0, 0.0]"),
+            "rod.ring.normal",
+        ),
+        (
+            ("control_points = 16", "control_points = 3"),
+            "rod.control_points",
+        ),
+        (
+            (
+                "control_points = 16",
+                "control_points = 16\nknots = \"clamped\"",
+            ),
+            "rod.knots",
+        ),
+    ] {
+        let path = common::cli::scene_variant(&dir, "ring_drop.toml", &[edit]);
+        let line = common::cli::refused(&["run", path.to_str().expect("path")]);
+        assert_field(&line, field);
+    }
+    std::fs::remove_dir_all(&dir).expect("cleanup");
+}
