@@ -1,13 +1,21 @@
 //! Cost of a closed rod's step against an open rod's with as many stored control points:
 //! a 32-point ring and a 35-point open rod (stretching and gravity, implicit midpoint,
 //! 4 000 steps of 1 ms), wall time per step and per Newton iteration.
-//! `cargo run --release --example ring_cost`
+//! `cargo run --release --example ring_cost [STEPS] [false|true]` (the second argument
+//! runs only the open or the closed rod, for callgrind).
 use splinerod::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
 fn main() {
-    let steps = 4000;
-    for closed in [false, true] {
+    let steps: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(4000);
+    let only = std::env::args().nth(2);
+    for closed in [false, true]
+        .into_iter()
+        .filter(|c| only.as_deref().is_none_or(|o| o == c.to_string()))
+    {
         let material = Material {
             rest_length: TAU * 0.2,
             linear_density: 0.1,
