@@ -6,7 +6,7 @@
 use splinerod::prelude::*;
 use std::f64::consts::TAU;
 use std::time::Instant;
-fn main() {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let steps: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
@@ -21,36 +21,34 @@ fn main() {
             linear_density: 0.1,
         };
         let rod = if closed {
-            let space = PeriodicBSplineSpace::uniform(3, 32, material.rest_length).unwrap();
+            let space = PeriodicBSplineSpace::uniform(3, 32, material.rest_length)?;
             Rod::ring(
                 material,
                 Box::new(space),
                 Vector3::zeros(),
                 Vector3::z(),
                 0.202,
-            )
-            .unwrap()
+            )?
         } else {
-            let space = BSplineSpace::clamped_uniform(3, 35, material.rest_length).unwrap();
+            let space = BSplineSpace::clamped_uniform(3, 35, material.rest_length)?;
             Rod::straight(
                 material,
                 Box::new(space),
                 Vector3::zeros(),
                 Vector3::new(1.3, 0.0, 0.0),
-            )
-            .unwrap()
+            )?
         };
         let system = RodSystem::new(rod)
-            .with_energy(Stretching::new(10.0).unwrap())
-            .with_energy(Gravity::new(Vector3::new(0.0, 0.0, -9.81)).unwrap());
+            .with_energy(Stretching::new(10.0)?)
+            .with_energy(Gravity::new(Vector3::new(0.0, 0.0, -9.81))?);
         let mut sim = Simulation::new(
             system,
-            Box::new(ImplicitMidpoint::new(NewtonParams::default()).unwrap()),
+            Box::new(ImplicitMidpoint::new(NewtonParams::default())?),
         );
         let t = Instant::now();
         let mut iters = 0;
         for _ in 0..steps {
-            iters += sim.step(1e-3).unwrap().solver.newton_iterations;
+            iters += sim.step(1e-3)?.solver.newton_iterations;
         }
         let el = t.elapsed().as_secs_f64();
         println!(
@@ -60,4 +58,5 @@ fn main() {
             el / iters as f64 * 1e6
         );
     }
+    Ok(())
 }
