@@ -76,6 +76,25 @@ fn a_ring_hangs_from_a_pin_without_a_seam() {
 }
 
 #[test]
+fn a_ring_can_be_cut_at_its_seam() {
+    for at in ["0.0", "1.0"] {
+        let seam = format!("{RING}\n[[cuts]]\nat = {at}\ntime = 0.1\n");
+        let result = run(&accepted(&seam)).expect("run");
+        assert_eq!(result.pieces, 1, "the seam cut opens the loop");
+        let both = format!("{seam}\n[[cuts]]\nat = 0.5\ntime = 0.1\n");
+        assert_eq!(run(&accepted(&both)).expect("run").pieces, 2);
+    }
+    // An open rod's ends are no cut.
+    let open = "[rod]\nrest_length = 1.0\nlinear_density = 0.1\nstretch_stiffness = 10.0\ncontrol_points = 8\n[[cuts]]\nat = 0.0\ntime = 0.0\n[solver]\nmethod = \"implicit-euler\"\ndt = 0.01\nduration = 0.1\n";
+    assert_field(&rejected(open), "cuts[0].at");
+    // A twisted loop cut at its seam releases its twist.
+    let text = std::fs::read_to_string("scenes/michell_ring.toml").expect("scene");
+    let text = set_in(&text, "duration", "0.6") + "\n[[cuts]]\nat = 0.0\ntime = 0.5\n";
+    let result = run(&accepted(&text)).expect("run");
+    assert_eq!(result.energy.get("twist").copied().unwrap_or(0.0), 0.0);
+}
+
+#[test]
 fn cutting_a_ring_opens_it_then_splits_it() {
     let once = with_line_in(RING, "[solver]", "");
     let once = format!("{once}\n[[cuts]]\nat = 0.6\ntime = 0.1\n");

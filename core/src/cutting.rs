@@ -6,9 +6,10 @@
 use crate::{CoreError, KnotMap, Real, Rod};
 
 impl Rod {
-    /// Cuts the rod at material coordinate `s` (strictly inside `(0, L)`) by exact knot
-    /// insertions until `s` has multiplicity `degree + 1`; returns the number of
-    /// insertions. Errors, changing nothing, if `s` is outside the rod or already a cut.
+    /// Cuts the rod at material coordinate `s` (strictly inside `(0, L)`; on a closed rod
+    /// also `0` or `L`, its seam) by exact knot insertions until `s` has multiplicity
+    /// `degree + 1`; returns the number of insertions. Errors, changing nothing, if `s`
+    /// is outside the rod or already a cut.
     pub fn cut(&mut self, s: Real) -> Result<usize, CoreError> {
         self.cut_with(s, &mut |_, _| {})
     }
@@ -22,7 +23,11 @@ impl Rod {
     ) -> Result<usize, CoreError> {
         let d = self.basis().degree();
         let (start, end) = self.basis().domain();
-        if !(s > start && s < end) {
+        // A closed rod may also be cut at its seam (s = 0, the same point as s = L).
+        let seam = self.is_closed() && (s == start || s == end);
+        let s = if seam { start } else { s };
+        let inside = s > start && s < end;
+        if !(inside || seam) {
             return Err(CoreError::OutsideDomain { s, start, end });
         }
         let present = self.knot_multiplicity(s);
@@ -69,13 +74,20 @@ impl Rod {
     }
 
     /// Number of mechanically independent pieces: one more than the number of cuts, or
-    /// for a closed rod as many as its cuts (the first cut opens the loop), at least one.
+    /// for a closed rod as many as its cuts (the first cut opens the loop; a cut at the
+    /// seam counts), at least one.
     pub fn pieces(&self) -> usize {
         let cuts = self.cut_points().count();
         match self.is_closed() {
-            true => cuts.max(1),
+            true => (cuts + usize::from(self.is_cut_at_seam())).max(1),
             false => cuts + 1,
         }
+    }
+
+    /// Whether a closed rod is cut at its seam (the knot `0` of multiplicity
+    /// `degree + 1`); never for an open rod, whose ends are no cut.
+    pub fn is_cut_at_seam(&self) -> bool {
+        self.is_closed() && self.knot_multiplicity(0.0) > self.basis().degree()
     }
 
     /// Whether knot `index` belongs to a cut (removing it would reconnect two pieces).

@@ -35,9 +35,10 @@ pub struct PeriodicBSplineSpace {
 }
 
 impl PeriodicBSplineSpace {
-    /// A space of period `period` on the breakpoints of one period: `breaks[0] = 0`, then
-    /// non-decreasing values below `period`, each repeated at most `degree + 1` times (a
-    /// cut; the seam `0` once). One control point per breakpoint, at least `degree + 1`.
+    /// A space of period `period` on the breakpoints of one period: `breaks[0] = 0` (the
+    /// seam), then non-decreasing values below `period`, each repeated at most
+    /// `degree + 1` times (a cut; the seam too). One control point per breakpoint, at
+    /// least `degree + 1`.
     pub fn new(degree: usize, breaks: Vec<Real>, period: Real) -> Result<Self, CoreError> {
         crate::check::positive("period", period)?;
         let m = breaks.len();
@@ -65,11 +66,11 @@ impl PeriodicBSplineSpace {
                 end: period,
             });
         }
-        if breaks[0] != 0.0 || breaks.get(1) == Some(&0.0) {
+        if breaks[0] != 0.0 {
             return Err(CoreError::InvalidParameter {
                 name: "periodic breakpoints",
                 value: breaks[0],
-                reason: "the first must be 0, the seam, and occur once",
+                reason: "the first must be 0, the seam",
             });
         }
         let extended = BSplineSpace::new(degree, extended_knots(degree, &breaks, period))?;
@@ -97,6 +98,39 @@ impl PeriodicBSplineSpace {
     /// The breakpoints of one period, `u_0 = 0 ≤ … < L`.
     pub fn breaks(&self) -> &[Real] {
         &self.breaks
+    }
+
+    /// Inserts the seam's value once more (Boehm at `u = 0`, the last of the seam's
+    /// knots): raising it to `degree + 1` cuts the loop open there.
+    fn insert_at_seam(&mut self) -> Result<KnotMap, CoreError> {
+        let d = self.degree();
+        let seam = self.breaks.iter().take_while(|&&u| u == 0.0).count();
+        if seam > d {
+            let max = d + 1;
+            let (value, multiplicity) = (0.0, seam + 1);
+            return Err(CoreError::MultiplicityTooHigh {
+                value,
+                multiplicity,
+                max,
+            });
+        }
+        let t = self.knots();
+        let k = d + seam - 1;
+        let mut alphas = [0.0; MAX_ORDER];
+        for (e, alpha) in alphas.iter_mut().enumerate().take(d) {
+            let i = k - d + 1 + e;
+            *alpha = (0.0 - t[i]) / (t[i + d] - t[i]);
+        }
+        let map = KnotMap::insertion(d, self.count(), k, 0.0, &alphas);
+        let mut breaks = self.breaks.clone();
+        breaks.insert(0, 0.0);
+        *self = self.with_breaks(breaks)?;
+        Ok(map.with_ties(self.breaks.len()))
+    }
+
+    /// How many times the seam's value occurs (`degree + 1`: the loop is cut there).
+    pub fn seam_multiplicity(&self) -> usize {
+        self.breaks.iter().take_while(|&&u| u == 0.0).count()
     }
 
     /// The same period on new breakpoints.
@@ -143,6 +177,9 @@ impl BasisSpace for PeriodicBSplineSpace {
     }
 
     fn insert_knot(&mut self, s: Real) -> Result<KnotMap, CoreError> {
+        if s == 0.0 || s == self.period {
+            return self.insert_at_seam();
+        }
         // The stored knots are the periodic ones around the window, so the ordinary
         // insertion computes the window; the new space rebuilds its copies.
         let mut extended = self.extended.clone();

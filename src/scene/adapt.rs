@@ -185,6 +185,7 @@ pub(crate) fn validate(
     grabs: &[GrabSpec],
     cuts: &[CutSpec],
     initial: usize,
+    closed: bool,
 ) -> Result<(), Error> {
     if let Some(a) = adaptivity {
         validate_adaptivity(a, initial)?;
@@ -205,8 +206,14 @@ pub(crate) fn validate(
         positive(&format!("grabs[{i}].stiffness"), g.stiffness)?;
     }
     for (i, c) in cuts.iter().enumerate() {
-        if !(c.at > 0.0 && c.at < 1.0) {
-            let reason = "must be strictly inside (0, 1)";
+        // A closed rod may be cut at its seam, 0 ≡ 1.
+        let seam = closed && (c.at == 0.0 || c.at == 1.0);
+        let inside = c.at > 0.0 && c.at < 1.0;
+        if !(inside || seam) {
+            let reason = match closed {
+                true => "must be in [0, 1] (0 and 1 are the seam of a closed rod)",
+                false => "must be strictly inside (0, 1)",
+            };
             return Err(Error::field(format!("cuts[{i}].at"), c.at, reason));
         }
         non_negative(&format!("cuts[{i}].time"), c.time)?;

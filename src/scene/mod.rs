@@ -391,6 +391,7 @@ impl Scene {
             &self.grabs,
             &self.cuts,
             self.rod.control_points,
+            self.closed(),
         )
     }
 

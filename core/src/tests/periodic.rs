@@ -210,9 +210,11 @@ fn bad_periodic_spaces_are_errors() {
         bad(vec![0.1, 0.2, 0.5, 0.7], 1.0),
         Err(CoreError::InvalidParameter { .. })
     ));
+    // The seam may repeat (a cut there), up to degree + 1.
+    assert!(bad(vec![0.0, 0.0, 0.5, 0.7], 1.0).is_ok());
     assert!(matches!(
-        bad(vec![0.0, 0.0, 0.5, 0.7], 1.0),
-        Err(CoreError::InvalidParameter { .. })
+        bad(vec![0.0; 5].into_iter().chain([0.5, 0.7]).collect(), 1.0),
+        Err(CoreError::MultiplicityTooHigh { .. })
     ));
     assert!(matches!(
         bad(vec![0.0, 0.5, 0.2, 0.7], 1.0),
@@ -236,7 +238,8 @@ fn bad_periodic_spaces_are_errors() {
         Err(CoreError::MultiplicityTooHigh { .. })
     ));
     let mut space = PeriodicBSplineSpace::uniform(3, 5, 1.0).unwrap();
-    for s in [0.0, 1.0, -0.1, Real::NAN] {
+    // Outside the loop is an error; its seam, 0 or 1, may be inserted (a cut there).
+    for s in [-0.1, 1.1, Real::NAN] {
         assert!(space.insert_knot(s).is_err(), "inserting {s}");
     }
     // Removing down to fewer than degree + 1 control points is refused.
@@ -373,4 +376,56 @@ fn a_ring_fits_its_circle_to_the_order_of_the_basis() {
     assert!(bad(normal, 0.1).is_ok());
     let open = crate::BSplineSpace::clamped_uniform(3, 8, material.rest_length).unwrap();
     assert!(Rod::ring(material, Box::new(open), center, normal, 0.1).is_err());
+}
+
+#[test]
+fn a_closed_curve_can_be_cut_at_its_seam() {
+    for space in spaces().into_iter().filter(|s| s.degree() >= 2) {
+        let d = space.degree();
+        let q = closed_points(&space);
+        let (mut cut, mut q1) = (space.clone(), q.clone());
+        // The seam is a simple knot: d more copies make the cut.
+        for k in 1..=d {
+            let s = if k % 2 == 0 { 0.0 } else { space.period() }; // 0 and L: one point
+            cut.insert_knot(s).unwrap().apply_in_place(&mut q1);
+            assert_tied(&cut, &q1);
+            assert!(
+                max_difference((&space, &q), (&cut, &q1)) < 1e-12,
+                "degree {d}"
+            );
+        }
+        assert_eq!(cut.seam_multiplicity(), d + 1);
+        assert!(cut.insert_knot(0.0).is_err(), "already cut");
+        // No basis function straddles the seam any more: the functions at 0+ and at L−
+        // are different unknowns (indices mod the distinct count).
+        let m = cut.breaks().len();
+        let mut b = BasisValues::default();
+        cut.evaluate(0.0, &mut b).unwrap();
+        let start: Vec<usize> = (0..b.order)
+            .filter(|&k| b.value[k] != 0.0)
+            .map(|k| (b.first + k) % m)
+            .collect();
+        cut.evaluate(cut.period() * (1.0 - 1e-12), &mut b).unwrap();
+        let end: Vec<usize> = (0..b.order)
+            .filter(|&k| b.value[k] != 0.0)
+            .map(|k| (b.first + k) % m)
+            .collect();
+        assert!(
+            start.iter().all(|i| !end.contains(i)),
+            "degree {d}: {start:?} {end:?}"
+        );
+    }
+}
+
+#[test]
+fn a_ring_cut_at_its_seam_is_one_open_piece() {
+    let mut rod = ring(PeriodicBSplineSpace::uniform(3, 9, 1.3).unwrap());
+    assert_eq!(rod.pieces(), 1);
+    assert!(!rod.is_cut_at_seam());
+    assert_eq!(rod.cut(1.3).unwrap(), 3, "the seam is a knot already");
+    assert!(rod.is_cut_at_seam());
+    assert_eq!(rod.pieces(), 1);
+    rod.cut(0.5).unwrap();
+    assert_eq!(rod.pieces(), 2);
+    assert!(rod.cut(0.0).is_err(), "the seam is cut already");
 }

@@ -178,7 +178,7 @@ pub(crate) fn is_cut(rod: &Rod) -> bool {
     let basis = rod.basis();
     let (d, n) = (basis.degree(), basis.count());
     let knots = &basis.knots()[d + 1..n];
-    knots.windows(d + 1).any(|w| w[0] == w[d])
+    knots.windows(d + 1).any(|w| w[0] == w[d]) || rod.is_cut_at_seam()
 }
 
 /// \\(K(x, y) = 2\, x \times y / (1 + x \cdot y)\\) (the discrete curvature binormal).
