@@ -1,13 +1,7 @@
-use super::{all_test_spaces, irregular_space};
+use super::{all_test_spaces, irregular_space, max_curve_difference};
 use crate::{BSplineSpace, BasisSpace, BasisValues, CoreError, KnotOperation, Real};
 use nalgebra::Vector3;
 use proptest::prelude::*;
-
-fn curve(space: &dyn BasisSpace, q: &[Vector3<Real>], s: Real) -> Vector3<Real> {
-    let mut b = BasisValues::default();
-    space.evaluate(s, &mut b).unwrap();
-    b.combine(&b.value, q)
-}
 
 fn wiggly_points(n: usize) -> Vec<Vector3<Real>> {
     (0..n)
@@ -16,17 +10,6 @@ fn wiggly_points(n: usize) -> Vec<Vector3<Real>> {
             Vector3::new(x, (1.7 * x).sin(), (0.3 * x * x).cos())
         })
         .collect()
-}
-
-fn max_curve_difference(
-    a: (&dyn BasisSpace, &[Vector3<Real>]),
-    b: (&dyn BasisSpace, &[Vector3<Real>]),
-) -> Real {
-    let (s0, s1) = a.0.domain();
-    (0..=300)
-        .map(|k| s0 + (s1 - s0) * k as Real / 300.0)
-        .map(|s| (curve(a.0, a.1, s) - curve(b.0, b.1, s)).norm())
-        .fold(0.0, Real::max)
 }
 
 #[test]

@@ -15,14 +15,12 @@ use super::holonomy::{signed_angle, transport, Samples};
 use super::{Frame, Twisting};
 use nalgebra::Vector3;
 use splinerod_core::{CoreError, Real, Rod};
-use std::sync::Mutex;
 
 impl Twisting {
     /// The twist of the closed `rod` with torsional stiffness `GJ > 0`, starting with
     /// total twist `twist` (rad) in its present shape. The twist stays in the rod (its
     /// link is fixed) until a cut releases it.
     pub fn around_loop(stiffness: Real, rod: &Rod, twist: Real) -> Result<Self, CoreError> {
-        splinerod_core::rod::positive("twist_stiffness", stiffness)?;
         if !rod.is_closed() {
             return Err(CoreError::InvalidParameter {
                 name: "twist",
@@ -37,27 +35,8 @@ impl Twisting {
                 reason: "must be finite",
             });
         }
-        super::check_degree(rod)?;
-        let axis = rod.tangent(0.0)?;
-        let frame = Frame::along(axis)?;
-        let mut twisting = Self {
-            stiffness,
-            turn: twist,
-            start: frame,
-            end: frame,
-            rest: [0.0; 2],
-            branch: [0.0; 2],
-            released: false,
-            schedules: [None, None],
-            samples: Mutex::default(),
-            closed: true,
-        };
-        let raw = {
-            let samples = twisting.prepared(rod);
-            [super::FINE, super::COARSE].map(|p| loop_holonomy(&samples, p))
-        };
-        (twisting.rest, twisting.branch) = (raw, raw);
-        Ok(twisting)
+        let frame = Frame::along(rod.tangent(0.0)?)?;
+        Self::starting(stiffness, rod, [frame, frame], twist, true)
     }
 
     /// Whether this is the twist of a closed rod.

@@ -162,11 +162,22 @@ impl Twisting {
     /// Twisting between clamp frames `start` (at `s = 0`) and `end` (at `s = L`) of
     /// `rod`, which starts untwisted (ψ₀ is its holonomy now). `GJ > 0`.
     pub fn new(stiffness: Real, rod: &Rod, start: Frame, end: Frame) -> Result<Self, CoreError> {
+        Self::starting(stiffness, rod, [start, end], 0.0, false)
+    }
+
+    /// The energy with its rest holonomies ψ₀ those of `rod` now, and twist `turn`.
+    fn starting(
+        stiffness: Real,
+        rod: &Rod,
+        [start, end]: [Frame; 2],
+        turn: Real,
+        closed: bool,
+    ) -> Result<Self, CoreError> {
         splinerod_core::rod::positive("twist_stiffness", stiffness)?;
         check_degree(rod)?;
         let mut twisting = Self {
             stiffness,
-            turn: 0.0,
+            turn,
             start,
             end,
             rest: [0.0; 2],
@@ -174,7 +185,7 @@ impl Twisting {
             released: false,
             schedules: [None, None],
             samples: Mutex::default(),
-            closed: false,
+            closed,
         };
         let raw = {
             let samples = twisting.prepared(rod);
