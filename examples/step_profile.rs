@@ -23,10 +23,12 @@ fn main() -> Result<(), Error> {
     let system = pinned_cable_with(16, 1.05, 100.0, formulation)?;
     let mut sim = Simulation::new(system, Box::new(ImplicitEuler::new(params)?));
     let t = Instant::now();
+    let mut cg = 0;
     for _ in 0..steps {
-        sim.step(1e-3)?;
+        cg += sim.step(1e-3)?.solver.remainder_iterations;
     }
     let us = t.elapsed().as_secs_f64() / steps as Real * 1e6;
-    println!("{steps} steps, {us:.2} µs per step");
+    let cg = cg as Real / steps as Real;
+    println!("{steps} steps, {us:.2} µs per step, {cg:.2} conjugate-gradient iterations per step");
     Ok(())
 }

@@ -207,7 +207,8 @@ impl Constraints {
     }
 
     /// Solves the KKT system with homogeneous constraints, `G Δx = 0`: `flat` holds the
-    /// right-hand side on entry and the step on return; the multipliers go to `mu`.
+    /// right-hand side on entry and the step on return; `mu` is scratch (the Schur pins'
+    /// multipliers land there, the point pins' are not computed: no caller reads them).
     pub fn solve_homogeneous(
         &mut self,
         solver: &mut LinearSolver,
@@ -221,7 +222,8 @@ impl Constraints {
         Ok(())
     }
 
-    /// [`Self::correct`], for the pins' targets or (`targets` false) zero gaps.
+    /// [`Self::correct`], for the pins' targets or (`targets` false: the homogeneous
+    /// solve) zero gaps and no point-pin multipliers.
     fn correct_for(
         &mut self,
         x: &[Vector3<Real>],
@@ -249,6 +251,9 @@ impl Constraints {
         for (j, s) in self.sol.iter().enumerate() {
             let col = &self.y[j * dofs..(j + 1) * dofs];
             flat.iter_mut().zip(col).for_each(|(f, c)| *f += s * c);
+        }
+        if !targets {
+            return;
         }
         self.others.clear();
         for k in self.points.control_points() {

@@ -180,6 +180,14 @@ impl PointPins {
         for &(_, k) in &self.pins {
             self.rhs.push(flat3(b, k));
         }
+        if targets.is_none() {
+            // Zero gaps: only the pinned rows change.
+            for (e, &(_, k)) in self.pins.iter().enumerate() {
+                let value = (Matrix3::identity() - self.projectors[e]) * flat3(b, k);
+                b[3 * k..3 * k + 3].copy_from_slice(value.as_slice());
+            }
+            return;
+        }
         let held = |e: usize| {
             let (p, k) = self.pins[e];
             targets.map_or(Vector3::zeros(), |t| self.projectors[e] * (t[p] - x[k]))

@@ -38,7 +38,7 @@ pub const MAX_ITERATIONS: usize = 60;
 
 /// Newton's correction ends once a change is below this fraction of the Newton
 /// tolerance (in the unknowns' units).
-pub const REMAINDER_FLOOR: Real = 1e-2;
+pub const REMAINDER_FLOOR: Real = 1e-1;
 
 /// Relative accuracy of the corrected step (largest entry of the last correction over
 /// the step's).
@@ -94,6 +94,7 @@ impl RemainderCg {
         self.e.iter_mut().for_each(|e| *e = 0.0);
         self.ap.iter_mut().for_each(|a| *a = 0.0);
         let mut iterations = 0;
+        let mut previous = Real::INFINITY;
         while iterations < MAX_ITERATIONS {
             iterations += 1;
             self.add_product_of_z(remainder);
@@ -112,9 +113,10 @@ impl RemainderCg {
                 .zip(&self.e)
                 .map(|(d, e)| (d + e).abs())
                 .fold(0.0, Real::max);
-            if change <= floor.max(RELATIVE_TOLERANCE * size) {
+            if remaining(change, previous) <= floor.max(RELATIVE_TOLERANCE * size) {
                 break;
             }
+            previous = change;
             if size.is_nan() || size > DIVERGENCE * start {
                 // Not a contraction after all (round-off): keep P's step.
                 self.e.iter_mut().for_each(|e| *e = 0.0);
@@ -193,6 +195,19 @@ impl RemainderCg {
 enum Target {
     Rho,
     Ap,
+}
+
+/// The error left in the step after a correction of largest entry `change` that
+/// followed one of `previous`: with the contraction `r = change / previous` seen, the
+/// corrections still to come sum to about `change · r / (1 − r)`. Taken only for a clear
+/// contraction (`r ≤ 1/2`); otherwise the change itself.
+fn remaining(change: Real, previous: Real) -> Real {
+    let r = change / previous;
+    if previous.is_finite() && r <= 0.5 {
+        change * r / (1.0 - r)
+    } else {
+        change
+    }
 }
 
 /// An inner product that is not positive (possible only through round-off, `P` and

@@ -102,24 +102,22 @@ impl TensionGram {
     /// Solves \\(G x = r\\) in place, with `r[j]` the entry of function `j` (`j = 0 ..= n`;
     /// entries `0` and `n` are not tension functions and are left alone).
     pub fn solve(&self, r: &mut [Real]) {
-        let w = self.width;
-        let n = self.u.len() / w.max(1);
+        let w = self.width.max(1);
+        let n = self.u.len() / w;
         let x = &mut r[1..=n];
-        // Uᵀ y = r.
-        for i in 0..n {
-            let yi = x[i] / self.u[i * w];
+        // Uᵀ y = r, row by row of U.
+        for (i, row) in self.u.chunks_exact(w).enumerate() {
+            let yi = x[i] / row[0];
             x[i] = yi;
-            for o in 1..w.min(n - i) {
-                x[i + o] -= self.u[i * w + o] * yi;
+            for (x, &u) in x[i + 1..].iter_mut().zip(&row[1..]) {
+                *x -= u * yi;
             }
         }
         // U x = y.
-        for i in (0..n).rev() {
-            let mut s = x[i];
-            for o in 1..w.min(n - i) {
-                s -= self.u[i * w + o] * x[i + o];
-            }
-            x[i] = s / self.u[i * w];
+        for (i, row) in self.u.chunks_exact(w).enumerate().rev() {
+            let (head, tail) = x[i..].split_at_mut(1);
+            let s: Real = tail.iter().zip(&row[1..]).map(|(x, &u)| u * x).sum();
+            head[0] = (head[0] - s) / row[0];
         }
     }
 }

@@ -34,8 +34,6 @@ thread_local! {
     static TENSIONS: RefCell<Vec<(Real, Real)>> = const { RefCell::new(Vec::new()) };
     /// Scratch of the Gram solves.
     static SOLVE: RefCell<Vec<Real>> = const { RefCell::new(Vec::new()) };
-    /// Scratch of the remainder's lumped part.
-    static LUMPED: RefCell<Vec<Real>> = const { RefCell::new(Vec::new()) };
     /// The Gram matrix of a rod the energy's own does not match.
     static GRAM: RefCell<TensionGram> = RefCell::new(TensionGram::default());
     /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
@@ -59,6 +57,10 @@ struct Rows {
     functions: Vec<(usize, usize, usize, Real, Real)>,
     /// `∂b_j/∂q`, `MAX_WIDTH` entries per function.
     db: Vec<Vector3<Real>>,
+    /// Scratch of the remainder products: `B v`, then `G⁻¹ B v` (per function `0 ..= n`).
+    y: Vec<Real>,
+    /// Scratch of the remainder products: `m⁻¹ B v`.
+    lumped: Vec<Real>,
 }
 
 impl Rows {
@@ -109,15 +111,38 @@ impl Rows {
         }
     }
 
-    /// Calls `f(j, first, m_j, ∂b_j/∂q_first..)` for every function.
-    fn for_each(&self, mut f: impl FnMut(usize, usize, Real, &[Vector3<Real>])) {
-        for (k, &(index, first, width, m, _)) in self.functions.iter().enumerate() {
-            f(
-                index,
-                first,
-                m,
-                &self.db[k * MAX_WIDTH..k * MAX_WIDTH + width],
-            );
+    /// `out += c · Bᵀ (G⁻¹ − m⁻¹) B v` with `solve` the solve with `G` (see
+    /// [`Stretching::mixed_remainder`]).
+    fn remainder(
+        &mut self,
+        v: &[Vector3<Real>],
+        c: Real,
+        solve: impl FnOnce(&mut [Real]),
+        out: &mut [Vector3<Real>],
+    ) {
+        let len = self.positions.len() + 1;
+        for buffer in [&mut self.y, &mut self.lumped] {
+            buffer.clear();
+            buffer.resize(len, 0.0);
+        }
+        // y = B v, and its lumped image m⁻¹ B v.
+        let rows = self.db.chunks_exact(MAX_WIDTH);
+        for (&(index, first, width, m, _), db) in self.functions.iter().zip(rows) {
+            let bv: Real = db[..width]
+                .iter()
+                .zip(&v[first..first + width])
+                .map(|(d, v)| d.dot(v))
+                .sum();
+            self.y[index] = bv;
+            self.lumped[index] = if m > 0.0 { bv / m } else { 0.0 };
+        }
+        solve(&mut self.y);
+        let rows = self.db.chunks_exact(MAX_WIDTH);
+        for (&(index, first, width, _, _), db) in self.functions.iter().zip(rows) {
+            let yi = c * (self.y[index] - self.lumped[index]);
+            for (o, d) in out[first..first + width].iter_mut().zip(&db[..width]) {
+                *o += d * yi;
+            }
         }
     }
 }
@@ -274,42 +299,8 @@ impl Stretching {
             if !rows.hold(self, rod) {
                 rows.fill(self, rod);
             }
-            self.remainder_with(&rows, rod, v, scale, out);
-        });
-    }
-
-    /// [`Self::mixed_remainder`] with the rows of `B` at the rod's state.
-    fn remainder_with(
-        &self,
-        rows: &Rows,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        SOLVE.with(|s| {
-            LUMPED.with(|l| {
-                let (mut y, mut lumped) = (s.borrow_mut(), l.borrow_mut());
-                for buffer in [&mut *y, &mut *lumped] {
-                    buffer.clear();
-                    buffer.resize(rod.len() + 1, 0.0);
-                }
-                // y = B v, and its lumped image m⁻¹ B v.
-                rows.for_each(|index, first, m, db| {
-                    let bv: Real = db.iter().zip(&v[first..]).map(|(d, v)| d.dot(v)).sum();
-                    y[index] = bv;
-                    lumped[index] = if m > 0.0 { bv / m } else { 0.0 };
-                });
-                self.solve_gram(rod, &mut y);
-                // out += scale · EA · Bᵀ (G⁻¹ − m⁻¹) B v.
-                let c = scale * self.stiffness;
-                rows.for_each(|index, first, _, db| {
-                    let yi = c * (y[index] - lumped[index]);
-                    for (o, d) in out[first..].iter_mut().zip(db) {
-                        *o += d * yi;
-                    }
-                });
-            });
+            let c = scale * self.stiffness;
+            rows.remainder(v, c, |y| self.solve_gram(rod, y), out);
         });
     }
 
