@@ -367,8 +367,7 @@ impl Stretching {
                 if let Some(g) = gradient.as_deref_mut() {
                     add_scaled(g, k.first, k.db, tension);
                 }
-                add_outer_products(hessian, k.first, c, k.db);
-                add_scaled_identities(hessian, k, geometric_tension(kind, tension));
+                add_function_blocks(hessian, k, c, geometric_tension(kind, tension));
                 if let Some(heads) = heads.as_mut() {
                     match seam::partner(rod, k.index) {
                         Some(tail) if tail > k.index => heads.keep(k.index, k.first, k.db),
@@ -450,6 +449,34 @@ fn add_scaled(gradient: &mut [Vector3<Real>], first: usize, db: &[Vector3<Real>]
     }
 }
 
+/// Adds one tension function's material and geometric stiffness,
+/// \\(c\\, \\partial b_a \\partial b_b^T + \\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`,
+/// `a ≤ b`, in one pass over its blocks of the band (the same sums, in the same order,
+/// as [`add_outer_products`] then [`add_scaled_identities`], which take a band too
+/// narrow for it).
+#[inline]
+fn add_function_blocks(hessian: &mut BlockBanded, k: &Moment<'_>, c: Real, lambda: Real) {
+    let v = k.db;
+    if v.len() > hessian.bandwidth() + 1 {
+        add_outer_products(hessian, k.first, c, v);
+        add_scaled_identities(hessian, k, lambda);
+        return;
+    }
+    for (a, va) in v.iter().enumerate() {
+        let u = va * c;
+        let g = &k.g[k.rows[a]..];
+        let row = hessian.band_row_mut(k.first + a);
+        for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
+            add_rank_one(block, &u, vb);
+            let d = lambda * gab;
+            let e = block.as_mut_slice();
+            e[0] += d;
+            e[4] += d;
+            e[8] += d;
+        }
+    }
+}
+
 /// Adds \\(\\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`, `a ≤ b`, into the
 /// band (or block by block where it is narrower, see [`add_any`]).
 #[inline]
@@ -502,10 +529,11 @@ fn add_outer_products(hessian: &mut BlockBanded, first: usize, c: Real, v: &[Vec
 /// product through nalgebra's operators was measured 2–3 times slower here).
 #[inline(always)]
 fn add_rank_one(block: &mut Matrix3<Real>, u: &Vector3<Real>, v: &Vector3<Real>) {
-    for c in 0..3 {
-        let vc = v[c];
-        for r in 0..3 {
-            block[(r, c)] += u[r] * vc;
+    // Column-major: entry (r, c) at 3c + r.
+    let e = block.as_mut_slice();
+    for (column, &vc) in e.chunks_exact_mut(3).zip(v.iter()) {
+        for (x, &ur) in column.iter_mut().zip(u.iter()) {
+            *x += ur * vc;
         }
     }
 }
