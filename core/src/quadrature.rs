@@ -122,6 +122,7 @@ impl QuadratureTable {
             points_per_span: rule.nodes.len(),
             ..Self::default()
         };
+        table.reserve(spans(space).count() * table.points_per_span);
         let mut b = BasisValues::default();
         for span in spans(space) {
             let h = span.end - span.start;
@@ -132,6 +133,20 @@ impl QuadratureTable {
             }
         }
         Ok(table)
+    }
+
+    /// Reserves room for exactly `points` more points (a table of 10⁵ spans would
+    /// otherwise keep up to twice its size in capacity).
+    fn reserve(&mut self, points: usize) {
+        let o = self.order.min(MAX_ORDER);
+        for v in [&mut self.s, &mut self.weight] {
+            v.reserve_exact(points);
+        }
+        self.first.reserve_exact(points);
+        for v in [&mut self.value, &mut self.d1, &mut self.d2] {
+            v.reserve_exact(points * o);
+        }
+        self.lower.reserve_exact(points * o.saturating_sub(1));
     }
 
     fn push(&mut self, s: Real, weight: Real, b: &BasisValues, knots: &[Real]) {
