@@ -43,6 +43,14 @@
 //! | this form | 1.5e-5 / 2.8e-6 / 6.3e-7 | 4.3e-6 / 1.4e-7 / 7.6e-9 | same as 10⁶ |
 //! | consistent Gram, one Neumann term | 4.5e-6 / 4.2e-7 / 7.8e-8 | 4.3e-6 / 1.4e-7 / 7.6e-9 | (bandwidth 3d − 2) |
 //! | consistent Gram ([`super::StretchFormulation::MixedConsistent`]) | 4.5e-6 / 1.5e-7 / 7.9e-9 | 4.3e-6 / 1.4e-7 / 7.6e-9 | same as 10⁶ |
+//! | local dual test functions (below) | 1.2e-4 / 1.5e-5 / 2.1e-6 | same | same |
+//!
+//! *Local dual test functions* (measured, not kept): test functions \\(\\psi_j\\) on the
+//! support of \\(\\varphi_j\\) with \\(\\int \\psi_j \\varphi_k = U_{jk}\\) (`G = UᵀU`)
+//! make \\(\\tfrac{EA}{2}\\sum_j (\\int \\psi_j \\varepsilon)^2\\) exact on the tension space with the
+//! lumped form's band (checked to 1e-12 for degrees 2–4), but in the stiff limit they
+//! hold \\(\\int \\psi_j \\varepsilon = 0\\), a worse approximation of inextensibility than
+//! \\(b_j = 0\\): third order and 27 × the error at 16 points.
 //!
 //! Reduced integration keeps too many constraints (`d − 1` or more per span); span means
 //! are EA-independent but only first order in the tension. The degree-`d − 1` tension
@@ -65,9 +73,12 @@
 //! EA = 10² N, the longitudinal string mode within 3.4e-9, and the stiff columns
 //! unchanged. The energy and gradient stay O(n) (one banded solve with `G`); the
 //! Hessian's dense part goes through Newton's conjugate-gradient correction. Measured
-//! (callgrind, `examples/step_profile.rs`): the 16-point step costs 1.85 × the lumped
-//! one, so the lumped form stays the default and
-//! [`super::StretchFormulation::Pointwise`] stays available.
+//! (callgrind, `examples/step_profile.rs`, steps 5 000–10 000): the 16-point step costs
+//! 131 k instructions against the lumped form's 87 k (1.5 ×; 1.24 × the pointwise step
+//! #12 was filed against), and about 2 × on long steps from a compressed start
+//! (`ensemble_cables.toml`: 7 conjugate-gradient iterations per Newton iteration), so
+//! the lumped form stays the default and [`super::StretchFormulation::Pointwise`] stays
+//! available.
 //!
 //! **Knot insertion** maps the curve and the velocities exactly, as always; the mixed
 //! energy is not invariant, because the tension space refines with the knots. By

@@ -23,8 +23,8 @@
 //!
 //! **Hessian.** The exact derivative of that formula. With
 //! \\(K(x, y) = 2\,x\times y/(1 + x\cdot y)\\),
-//! \\(K_x = (-2[y]_\times - K y^T)/(1 + x\cdot y)\\),
-//! \\(K_y = (2[x]_\times - K x^T)/(1 + x\cdot y)\\) and \\(P_k = I - T_k T_k^T\\):
+//! \\(K_x = (-2\[y\]_\times - K y^T)/(1 + x\cdot y)\\),
+//! \\(K_y = (2\[x\]_\times - K x^T)/(1 + x\cdot y)\\) and \\(P_k = I - T_k T_k^T\\):
 //! \\(\partial h_k/\partial a_{k+1} = K_y(T_k, T_{k+1}) P_{k+1} / (2|a_k||a_{k+1}|)\\)
 //! and \\(\partial h_k/\partial a_k = (K_y(T_{k-1}, T_k) + K_x(T_k, T_{k+1}))
 //! P_k/(2|a_k|^2) - (\kappa b_k + \kappa b_{k+1}) a_k^T/(2|a_k|^3)\\). Consecutive samples
