@@ -27,6 +27,7 @@
 
 mod banded_cholesky;
 pub mod banded_ldlt;
+pub mod batched;
 mod bdf2;
 mod block_pattern;
 pub mod block_sparse;
