@@ -17,7 +17,7 @@
 //! of `control_points + 1` breakpoints, the first being the seam and the last one period
 //! after it (any units: mapped to `[0, L]`).
 
-use crate::scene::{KnotsSpec, Scene, StretchFormulationSpec};
+use crate::scene::{KnotsSpec, Scene};
 use crate::Error;
 use nalgebra::Vector3;
 use serde::Deserialize;
@@ -83,14 +83,6 @@ impl Scene {
             }
             (Some(ring), None) => validate_ring(ring)?,
             (None, Some(_)) => {}
-        }
-        if r.stretch_formulation == StretchFormulationSpec::MixedConsistent {
-            let reason = "mixed-consistent does not support closed rods yet (use \"mixed\")";
-            return refuse(
-                "rod.stretch_formulation",
-                "\"mixed-consistent\"".into(),
-                reason,
-            );
         }
         if let Some((i, _)) = self.pins.iter().enumerate().find(|(_, p)| p.clamp) {
             let reason = "a closed rod has no ends to clamp";

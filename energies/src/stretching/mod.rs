@@ -429,19 +429,7 @@ impl Energy for Stretching {
         self.follow(rod);
     }
 
-    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
-        if rod.is_closed() && self.consistent() {
-            return Err(CoreError::InvalidParameter {
-                name: "stretch_formulation",
-                value: 0.0,
-                reason: "mixed-consistent does not support closed rods yet (use mixed)",
-            });
-        }
-        Ok(())
-    }
-
     fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
-        self.supports(rod)?;
         if !self.table.matches(rod) || (self.consistent() && !self.gram.matches(rod)) {
             self.tabulate(rod);
         }

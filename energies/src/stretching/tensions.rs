@@ -26,7 +26,7 @@ use super::seam::Merged;
 use super::table::{Moment, TensionTable, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::Vector3;
-use splinerod_core::{Real, Rod};
+use splinerod_core::{Real, Rod, MAX_DEGREE};
 use std::cell::RefCell;
 
 thread_local! {
@@ -61,6 +61,9 @@ struct Rows {
     y: Vec<Real>,
     /// Scratch of the remainder products: `m⁻¹ B v`.
     lumped: Vec<Real>,
+    /// A closed rod's distinct control points and degree: its split pairs `j`, `j + m`
+    /// (`1 ≤ j < d`) have one lumped weight ([`super::seam`]).
+    pairs: Option<(usize, usize)>,
 }
 
 impl Rows {
@@ -99,6 +102,10 @@ impl Rows {
         });
         self.positions.clear();
         self.positions.extend_from_slice(&rod.positions);
+        self.pairs = rod
+            .basis()
+            .periodic_count()
+            .map(|m| (m, rod.basis().degree()));
         self.key = Some(Self::key_of(energy, rod));
     }
 
@@ -136,12 +143,39 @@ impl Rows {
             self.y[index] = bv;
             self.lumped[index] = if m > 0.0 { bv / m } else { 0.0 };
         }
+        if let Some((m, d)) = self.pairs {
+            self.merge_pairs(m, d);
+        }
         solve(&mut self.y);
         let rows = self.db.chunks_exact(MAX_WIDTH);
         for (&(index, first, width, _, _), db) in self.functions.iter().zip(rows) {
             let yi = c * (self.y[index] - self.lumped[index]);
             for (o, d) in out[first..first + width].iter_mut().zip(&db[..width]) {
                 *o += d * yi;
+            }
+        }
+    }
+}
+
+impl Rows {
+    /// Gives both halves of each split pair the lumped image of the pair,
+    /// \((y_j + y_{j+m}) / (m_j + m_{j+m})\) (`lumped` holding each half's own).
+    fn merge_pairs(&mut self, m: usize, d: usize) {
+        let mut weights = [(0.0, 0.0); MAX_DEGREE];
+        for &(index, _, _, w, _) in &self.functions {
+            let head = if index > m { index - m } else { index };
+            if head >= 1 && head < d {
+                let slot = &mut weights[head - 1];
+                slot.0 += self.y[index];
+                slot.1 += w;
+            }
+        }
+        for (j, &(y, w)) in weights.iter().enumerate().take(d.saturating_sub(1)) {
+            let image = if w > 0.0 { y / w } else { 0.0 };
+            for index in [j + 1, j + 1 + m] {
+                if index < self.lumped.len() {
+                    self.lumped[index] = image;
+                }
             }
         }
     }
@@ -224,9 +258,10 @@ impl Stretching {
 
     /// Calls `f` with every tension function's [`Moment`] at the rod's positions, from
     /// the rows [`Self::with_tensions`] kept for the consistent form (no second pass over
-    /// the table), else from the table.
+    /// the table) when the energy's table matches the rod, else from the table.
     pub(super) fn for_each_moment(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {
         let cached = self.consistent()
+            && self.table.matches(rod)
             && ROWS.with(|rows| {
                 let rows = rows.borrow();
                 let hold = rows.hold(self, rod);
