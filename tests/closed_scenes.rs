@@ -149,12 +149,6 @@ fn bad_closed_rods_are_named() {
         )
         .replace("control_points = 16", "control_points = 16\nclosed = true");
     assert_field(&rejected(&no_shape), "rod.closed");
-    let consistent = with_line_in(
-        &closed,
-        "[rod]",
-        "stretch_formulation = \"mixed-consistent\"",
-    );
-    assert_field(&rejected(&consistent), "rod.stretch_formulation");
     let clamp = with_line_in(&closed, "[[pins]]", "clamp = true");
     assert_field(&rejected(&clamp), "pins[0].clamp");
     // A twisted loop needs bending; an open rod cannot start twisted.

@@ -28,7 +28,7 @@
 
 use crate::kkt::Constraints;
 use crate::linear::{LinearSolver, LinearSolverKind};
-use crate::remainder::{RemainderCg, REMAINDER_FLOOR};
+use crate::remainder::{RemainderCg, MOTION_FRACTION, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -179,6 +179,9 @@ pub struct NewtonWorkspace {
     scratch_mu: Vec<Vector3<Real>>,
     /// Step entries below this end the correction (unknowns' units).
     floor: Real,
+    /// Largest entry of the solve's first step from the banded matrix (unknowns' units),
+    /// which bounds the correction's floor from above ([`MOTION_FRACTION`]).
+    motion: Option<Real>,
 }
 
 impl NewtonWorkspace {
@@ -223,6 +226,7 @@ pub fn solve(
     let tolerance = params.tolerance * system.rod().material().rest_length;
     let length = problem.length_per_unknown();
     ws.floor = REMAINDER_FLOOR * tolerance / length;
+    ws.motion = None;
     let mut stats = StepStats::default();
     let mut previous = [Real::INFINITY; 2];
     // The merit at the applied iterate, once the line search has measured it.
@@ -307,10 +311,14 @@ fn newton_direction(
     // have no inner product to work in: the step stays P's (measured on a cut rod pulled
     // into compression: fewer Newton iterations than an unguarded correction).
     if scale > 0.0 && !ws.solver.is_indefinite() && system.has_hessian_remainder() {
+        let first = ws.flat.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
+        let floor = ws
+            .floor
+            .min(MOTION_FRACTION * *ws.motion.get_or_insert(first));
         let (solver, constraints, mu) = (&mut ws.solver, &mut ws.constraints, &mut ws.scratch_mu);
         stats.remainder_iterations += ws.remainder.correct(
             &mut ws.flat,
-            ws.floor,
+            floor,
             &mut |v, sign, out| system.add_hessian_remainder(v, sign * scale, out),
             &mut |z| constraints.solve_homogeneous(solver, x, z, mu),
         )?;

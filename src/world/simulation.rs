@@ -143,7 +143,8 @@ impl Simulation {
     /// One step of `dt` (0: an equilibrium at the current time) through every stage.
     fn advance(&mut self, dt: Real) -> Result<StepReport, Error> {
         self.clock = StageTimes::default();
-        let mut redone = 0;
+        // Steps redone on a finer basis, and the knots their refinement inserted.
+        let (mut redone, mut redo_inserted) = (0, 0);
         let start = Instant::now();
         let (solver, substeps, fresh) = loop {
             let (solver, substeps) = self.integrate_or_restore(dt)?;
@@ -160,6 +161,7 @@ impl Simulation {
             self.clock.adapt += stage.elapsed().as_secs_f64();
             if inserted > 0 {
                 redone += 1;
+                redo_inserted += inserted;
                 continue;
             }
             if rejected {
@@ -186,6 +188,7 @@ impl Simulation {
         let mut adapt = self.apply_adapter(fresh)?;
         self.clock.adapt += stage.elapsed().as_secs_f64();
         adapt.redone_steps = redone;
+        adapt.inserted += redo_inserted;
         let error_estimate = fresh
             .then(|| self.error_estimate().map(|e| e.max()))
             .flatten();

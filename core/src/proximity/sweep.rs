@@ -6,7 +6,10 @@
 //! `margin` above its upper bound. Sorting reuses the previous order as a warm start
 //! (insertion sort, giving up after `4n` moves for `sort_unstable`), so it is close to
 //! O(n) while the boxes move little between calls and never worse than O(n log n); the
-//! sweep is O(n + k) for `k` pairs overlapping along the sweep axis.
+//! sweep is O(n + k) for `k` pairs overlapping along the sweep axis. Boxes with equal
+//! lower bounds are ordered by index, so the order (and the order pairs are visited in)
+//! depends on the boxes alone, not on the warm start: a run resumed from a checkpoint,
+//! whose sweep starts cold, visits them as the run never stopped does.
 
 use crate::Real;
 use nalgebra::Vector3;
@@ -32,8 +35,7 @@ impl BoxSweep {
         }
         let key = |i: usize| lower[i][axis];
         if !warm || !insertion_sort(&mut self.order, key, 4 * n) {
-            self.order
-                .sort_unstable_by(|&a, &b| key(a).total_cmp(&key(b)));
+            self.order.sort_unstable_by(|&a, &b| ordering(key, a, b));
         }
     }
 
@@ -86,15 +88,20 @@ fn widest_axis(lower: &[Vector3<Real>], upper: &[Vector3<Real>]) -> usize {
     (max - min).imax()
 }
 
+/// The sweep's total order: by lower bound (`total_cmp`), then by index.
+#[inline]
+fn ordering(key: impl Fn(usize) -> Real, a: usize, b: usize) -> std::cmp::Ordering {
+    key(a).total_cmp(&key(b)).then(a.cmp(&b))
+}
+
 /// Sorts `order` by `key` with at most `budget` element moves; returns false (leaving a
 /// permutation of the input) when the budget runs out.
 fn insertion_sort(order: &mut [usize], key: impl Fn(usize) -> Real, budget: usize) -> bool {
     let mut moves = 0;
     for a in 1..order.len() {
         let item = order[a];
-        let k = key(item);
         let mut b = a;
-        while b > 0 && key(order[b - 1]) > k {
+        while b > 0 && ordering(&key, order[b - 1], item).is_gt() {
             order[b] = order[b - 1];
             b -= 1;
             moves += 1;

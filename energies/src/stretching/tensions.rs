@@ -34,8 +34,9 @@ thread_local! {
     static TENSIONS: RefCell<Vec<(Real, Real)>> = const { RefCell::new(Vec::new()) };
     /// Scratch of the Gram solves.
     static SOLVE: RefCell<Vec<Real>> = const { RefCell::new(Vec::new()) };
-    /// The Gram matrix of a rod the energy's own does not match.
-    static GRAM: RefCell<TensionGram> = RefCell::new(TensionGram::default());
+    /// The Gram matrix of a rod the energy's own does not match, and the energy (address)
+    /// it was built for.
+    static GRAM: RefCell<(usize, TensionGram)> = RefCell::new((0, TensionGram::default()));
     /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
     static ROWS: RefCell<Rows> = RefCell::new(Rows::default());
     /// The table of a closed rod the energy's own does not match, and the energy (address)
@@ -49,9 +50,11 @@ thread_local! {
 /// a product at any other state recomputes them.
 #[derive(Debug, Default)]
 struct Rows {
-    /// The energy (address and stiffness bits), the rod's topology epoch and its
-    /// number of quadrature points.
-    key: Option<(usize, u64, u64, usize)>,
+    /// The energy (address and stiffness bits), the rod's topology epoch, its number of
+    /// quadrature points, and whether the rows came from the energy's table (a sweep
+    /// differs from it in the last bits, and a table built later for the same epoch
+    /// must not find them).
+    key: Option<(usize, u64, u64, usize, bool)>,
     positions: Vec<Vector3<Real>>,
     /// Per tension function: index, first control point, width, weight, moment.
     functions: Vec<(usize, usize, usize, Real, Real)>,
@@ -78,7 +81,7 @@ impl Rows {
             })
     }
 
-    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64, usize) {
+    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64, usize, bool) {
         let address = energy as *const Stretching as usize;
         let points = rod.quadrature().len();
         (
@@ -86,6 +89,7 @@ impl Rows {
             energy.stiffness.to_bits(),
             rod.topology_epoch(),
             points,
+            energy.table.matches(rod),
         )
     }
 
@@ -309,11 +313,13 @@ impl Stretching {
             return self.gram.solve(r);
         }
         GRAM.with(|g| {
-            let mut gram = g.borrow_mut();
-            if !gram.matches(rod) {
-                gram.build(self, rod);
+            let mut cached = g.borrow_mut();
+            let owner = self as *const Stretching as usize;
+            if cached.0 != owner || !cached.1.matches(rod) {
+                cached.1.build(self, rod);
+                cached.0 = owner;
             }
-            gram.solve(r);
+            cached.1.solve(r);
         });
     }
 
