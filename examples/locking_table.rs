@@ -7,9 +7,9 @@ use splinerod::StretchFormulation;
 fn main() {
     for (name, formulation) in [
         ("pointwise (paper eq. 12)", StretchFormulation::Pointwise),
-        ("mixed (default)", StretchFormulation::Mixed),
+        ("mixed, lumped Gram", StretchFormulation::Mixed),
         (
-            "mixed, consistent Gram",
+            "mixed, consistent Gram (default)",
             StretchFormulation::MixedConsistent,
         ),
     ] {
