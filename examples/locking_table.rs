@@ -7,9 +7,9 @@ use splinerod::StretchFormulation;
 fn main() {
     for (name, formulation) in [
         ("pointwise (paper eq. 12)", StretchFormulation::Pointwise),
-        ("mixed, lumped Gram", StretchFormulation::Mixed),
+        ("mixed (default)", StretchFormulation::Mixed),
         (
-            "mixed, consistent Gram (default)",
+            "mixed, consistent Gram",
             StretchFormulation::MixedConsistent,
         ),
     ] {

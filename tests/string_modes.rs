@@ -10,12 +10,12 @@ fn euler() -> Box<dyn Integrator> {
     Box::new(ImplicitEuler::new(NewtonParams::default()).expect("params"))
 }
 
-/// The string is stretched by 20 %: the pointwise form resolves both modes to 1e-5, and
-/// so does the consistent mixed form, the default (measured 3.4e-9; the modal analysis
-/// includes its Hessian remainder). The lumped mixed form keeps the transverse mode
-/// (uniform tension is exact in it) but its lumped tension projection shifts the
-/// longitudinal mode by O(h²) (measured 6.3e-3 at 16 control points), documented in
-/// `energies/src/stretching/mixed.rs`.
+/// The string is stretched by 20 %: the pointwise form resolves both modes to 1e-5; the
+/// mixed form (default) keeps the transverse mode (uniform tension is exact in it) but
+/// its lumped tension projection shifts the longitudinal mode by O(h²) (measured
+/// 6.3e-3 at 16 control points) — the price of being locking-free, documented in
+/// `energies/src/stretching/mixed.rs`. The consistent mixed form removes that price
+/// (measured 3.4e-9; the modal analysis includes its Hessian remainder).
 #[test]
 fn modal_frequencies_match_the_analytic_string() {
     let r = string_reference().expect("reference");

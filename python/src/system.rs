@@ -91,7 +91,7 @@ macro_rules! energy_class {
 
 energy_class!(
     /// Green–Lagrange stretching, EA in N (`Stretching.inextensible()`: an exactly
-    /// inextensible rod). `formulation`: "mixed-consistent" (default), "mixed",
+    /// inextensible rod). `formulation`: "mixed" (default), "mixed-consistent",
     /// "pointwise"; `rest="initial"`: at rest in the rod's initial shape.
     Stretching
 );
@@ -136,7 +136,7 @@ fn positive(py: Python<'_>, field: &str, v: Real) -> PyResult<Real> {
 #[pymethods]
 impl Stretching {
     #[new]
-    #[pyo3(signature = (stiffness, formulation = "mixed-consistent", rest = "arclength"))]
+    #[pyo3(signature = (stiffness, formulation = "mixed", rest = "arclength"))]
     fn new(
         py: Python<'_>,
         stiffness: Real,

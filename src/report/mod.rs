@@ -18,7 +18,7 @@
 //!   points and wall time, effectivity of the error estimate
 //!   ([`crate::report::adaptive`]).
 //!
-//! The catenary and string sweeps use the default (consistent mixed) stretching; the static
+//! The catenary and string sweeps use the default (mixed) stretching; the static
 //! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
 //! rod is the one `order` states.
 
@@ -73,8 +73,7 @@ pub struct Report {
     pub order: Real,
     /// The static catenary with the pointwise stretching of the paper's eq. 12.
     pub statics_pointwise: Vec<Sample>,
-    /// Observed convergence order of the static catenary, default (consistent mixed)
-    /// stretching.
+    /// Observed convergence order of the static catenary, default (mixed) stretching.
     pub order_mixed: Real,
     /// The locking study: each formulation's name and rows.
     pub locking: Vec<(&'static str, Vec<LockingRow>)>,

@@ -142,10 +142,9 @@ pub struct RodSpec {
     /// or `"initial"` (the initial curve, the paper's I₀).
     #[serde(default)]
     pub rest_shape: RestShape,
-    /// How the strain enters the stretching energy: `"mixed-consistent"` (default: free
-    /// of membrane locking and accurate where the strain varies), `"mixed"` (the lumped
-    /// Gram matrix: locking-free, banded, second order where the strain varies) or
-    /// `"pointwise"` (the paper's eq. 12).
+    /// How the strain enters the stretching energy: `"mixed"` (default, free of membrane
+    /// locking), `"mixed-consistent"` (mixed with the consistent Gram matrix: also
+    /// accurate where the strain varies) or `"pointwise"` (the paper's eq. 12).
     #[serde(default)]
     pub stretch_formulation: StretchFormulationSpec,
 }

@@ -21,15 +21,14 @@ pub enum RestShape {
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum StretchFormulationSpec {
-    /// The strain projected onto the degree-`d − 1` splines, tension from the lumped
-    /// Gram matrix (locking-free, banded; second order where the strain varies).
+    /// The strain projected onto the degree-`d − 1` splines (locking-free; default).
+    #[default]
     Mixed,
     /// The strain at every quadrature point (order `d + 1` on stretchy rods; locks on
     /// stiff ones).
     Pointwise,
     /// Mixed, with the tension from the consistent Gram matrix (locking-free and order
-    /// `d + 1` on stretchy rods; Newton steps corrected by conjugate gradients; default).
-    #[default]
+    /// `d + 1` on stretchy rods; Newton steps corrected by conjugate gradients).
     MixedConsistent,
 }
 

@@ -25,10 +25,8 @@
 //! knots).
 //!
 //! These are the formulas of [`StretchFormulation::Pointwise`]. The default,
-//! [`StretchFormulation::MixedConsistent`], squares the strain only after projecting it
-//! onto the degree-`d − 1` splines ([`mixed`]: free of membrane locking, and of order
-//! `d + 1` on stretchy rods); [`StretchFormulation::Mixed`] is the same projection with a
-//! lumped Gram matrix (a banded Hessian, second order where the strain varies); and
+//! [`StretchFormulation::Mixed`], squares the strain only after projecting it onto the
+//! degree-`d − 1` splines ([`mixed`]: free of membrane locking), and
 //! [`Stretching::inextensible`] holds that projection at zero ([`multipliers`]).
 
 mod gram;
@@ -52,9 +50,9 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StretchFormulation {
     /// Mixed (assumed strain): the strain is projected onto the degree-`d − 1`
-    /// B-splines on the rod's knots before it is squared (`stretching/mixed.rs`), with
-    /// the tension from the lumped Gram matrix. Free of membrane locking at any `EA`,
-    /// banded Hessian, but second order where the strain varies along a stretchy rod.
+    /// B-splines on the rod's knots before it is squared (`stretching/mixed.rs`). Free
+    /// of membrane locking at any `EA`; the default.
+    #[default]
     Mixed,
     /// The paper's eq. 12: the strain squared at every quadrature point. Converges at
     /// order `d + 1` on stretchy rods, locks on stiff ones (`EA` ≫ the loads).
@@ -63,8 +61,7 @@ pub enum StretchFormulation {
     /// the lumped one (`stretching/tensions.rs`): locking-free and of order `d + 1` on
     /// stretchy rods too. Its Hessian has a remainder that is not banded
     /// ([`Energy::add_hessian_remainder`]), which Newton's method handles by
-    /// preconditioned conjugate gradients. The default.
-    #[default]
+    /// preconditioned conjugate gradients.
     MixedConsistent,
 }
 
