@@ -71,14 +71,17 @@
 //! \\(\\lambda = EA\\, G^{-1} b\\) ([`super::gram`], [`super::tensions`]), i.e. the energy
 //! \\(\\tfrac{EA}{2}\\lVert\\Pi\\varepsilon\\rVert^2\\) with the L² projection Π: order 4.1 at
 //! EA = 10² N, the longitudinal string mode within 3.4e-9, and the stiff columns
-//! unchanged. The energy and gradient stay O(n) (one banded solve with `G`); the
-//! Hessian's dense part goes through Newton's conjugate-gradient correction. Measured
-//! (callgrind, `examples/step_profile.rs`, steps 5 000–10 000): the 16-point step costs
-//! 131 k instructions against the lumped form's 87 k (1.5 ×; 1.24 × the pointwise step
-//! #12 was filed against), and about 2 × on long steps from a compressed start
-//! (`ensemble_cables.toml`: 7 conjugate-gradient iterations per Newton iteration), so
-//! the lumped form stays the default and [`super::StretchFormulation::Pointwise`] stays
-//! available.
+//! unchanged. The energy and gradient stay O(n) (one banded solve with `G`; on a closed
+//! rod a cyclic one, see [`super::gram`]); the Hessian's dense part goes through
+//! Newton's conjugate-gradient correction. Measured (callgrind,
+//! `examples/step_profile.rs`, steps 5–20 005, the window `splinerod bench` times): the
+//! 16-point step costs 126 k instructions against the lumped form's 87 k (1.19 × the
+//! pointwise step #12 was filed against), and about 2 × on long steps from a compressed
+//! start (`ensemble_cables.toml`: 7 conjugate-gradient iterations per Newton iteration).
+//! Made the default for one commit, it cost 1.4–3.5 × across `splinerod bench` (the
+//! ensembles, static Newton, the error estimator, 44 % more memory; figures in
+//! ARCHITECTURE.md), so the lumped form stays the default and
+//! [`super::StretchFormulation::Pointwise`] stays available.
 //!
 //! **Knot insertion** maps the curve and the velocities exactly, as always; the mixed
 //! energy is not invariant, because the tension space refines with the knots. By
