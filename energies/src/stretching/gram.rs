@@ -360,7 +360,7 @@ mod tests {
                 // r per stored function; a split pair's halves share the pair's entry.
                 let mut r = vec![0.0; rod.len() + 1];
                 for f in 1..rod.len() {
-                    let share = if closed && f <= d - 1 { 0.5 } else { 1.0 };
+                    let share = if closed && f < d { 0.5 } else { 1.0 };
                     let j = (f - 1) % functions;
                     r[f] = rhs[j] * if closed && f > m { 0.5 } else { share };
                 }
