@@ -111,15 +111,27 @@ pub struct QuadratureTable {
     d2: Vec<Real>,
     lower: Vec<Real>,
     points_per_span: usize,
+    /// Whether the second derivatives are left out ([`Self::without_second_derivatives`]).
+    lean: bool,
 }
 
 impl QuadratureTable {
     /// Tabulates `space` with `points_per_span` Gauss points on each non-empty span.
     pub fn new(space: &dyn BasisSpace, points_per_span: usize) -> Result<Self, CoreError> {
+        Self::tabulate(space, points_per_span, true)
+    }
+
+    /// [`Self::new`], with the second derivatives only if `second`.
+    pub fn tabulate(
+        space: &dyn BasisSpace,
+        points_per_span: usize,
+        second: bool,
+    ) -> Result<Self, CoreError> {
         let rule = GaussLegendre::new(points_per_span.max(1));
         let mut table = Self {
             order: space.degree() + 1,
             points_per_span: rule.nodes.len(),
+            lean: !second,
             ..Self::default()
         };
         table.reserve(spans(space).count() * table.points_per_span);
@@ -135,6 +147,20 @@ impl QuadratureTable {
         Ok(table)
     }
 
+    /// This table without the second derivatives of the basis (only bending reads them):
+    /// 128 bytes less per span for a cubic rod at 4 points per span. Every later
+    /// re-tabulation of its spans leaves them out too; [`QuadPoint::d2`] is then empty.
+    pub fn without_second_derivatives(mut self) -> Self {
+        self.lean = true;
+        self.d2 = Vec::new();
+        self
+    }
+
+    /// Whether the points carry the second derivatives ([`QuadPoint::d2`]).
+    pub fn has_second_derivatives(&self) -> bool {
+        !self.lean
+    }
+
     /// Reserves room for exactly `points` more points (a table of 10⁵ spans would
     /// otherwise keep up to twice its size in capacity).
     fn reserve(&mut self, points: usize) {
@@ -143,8 +169,11 @@ impl QuadratureTable {
             v.reserve_exact(points);
         }
         self.first.reserve_exact(points);
-        for v in [&mut self.value, &mut self.d1, &mut self.d2] {
+        for v in [&mut self.value, &mut self.d1] {
             v.reserve_exact(points * o);
+        }
+        if !self.lean {
+            self.d2.reserve_exact(points * o);
         }
         self.lower.reserve_exact(points * o.saturating_sub(1));
     }
@@ -159,7 +188,9 @@ impl QuadratureTable {
         self.first.push(b.first as u32);
         self.value.extend_from_slice(&b.value[..o]);
         self.d1.extend_from_slice(&b.d1[..o]);
-        self.d2.extend_from_slice(&b.d2[..o]);
+        if !self.lean {
+            self.d2.extend_from_slice(&b.d2[..o]);
+        }
     }
 
     /// Number of quadrature points.
@@ -193,7 +224,7 @@ impl QuadratureTable {
             first: self.first[p] as usize,
             value: &self.value[range.clone()],
             d1: &self.d1[range.clone()],
-            d2: &self.d2[range],
+            d2: if self.lean { &[] } else { &self.d2[range] },
             lower: &self.lower[p * (o - 1)..(p + 1) * (o - 1)],
         }
     }
@@ -222,6 +253,7 @@ impl QuadratureTable {
         let mut fresh = Self {
             order: self.order,
             points_per_span: self.points_per_span,
+            lean: self.lean,
             ..Self::default()
         };
         let rule = GaussLegendre::new(self.points_per_span.max(1));
@@ -247,7 +279,9 @@ impl QuadratureTable {
         let flat = old.start * o..old.end * o;
         self.value.splice(flat.clone(), fresh.value);
         self.d1.splice(flat.clone(), fresh.d1);
-        self.d2.splice(flat, fresh.d2);
+        if !self.lean {
+            self.d2.splice(flat, fresh.d2);
+        }
         let d = o - 1;
         self.lower.splice(old.start * d..old.end * d, fresh.lower);
         Ok(())

@@ -205,6 +205,22 @@ fn clamp_psd(m: &Matrix6<Real>) -> Matrix6<Real> {
 }
 
 impl Energy for Bending {
+    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
+        if rod.quadrature().has_second_derivatives() {
+            return Ok(());
+        }
+        Err(CoreError::InvalidParameter {
+            name: "bending on a rod without second derivatives",
+            value: 0.0,
+            reason: "bending reads the basis' second derivatives, which \
+                     Rod::without_second_derivatives left out of the quadrature table",
+        })
+    }
+
+    fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
+        self.supports(rod)
+    }
+
     fn name(&self) -> &str {
         "bending"
     }

@@ -211,3 +211,17 @@ fn definite_stretching_hessian_is_the_eigen_clamped_one() {
         assert!(error < 1e-12, "{name}: relative difference {error:e}");
     }
 }
+
+/// Bending reads the basis' second derivatives: a rod tabulated without them is refused
+/// with an error naming why, at the step's start (not a silent zero energy).
+#[test]
+fn bending_refuses_a_rod_without_second_derivatives() {
+    let rods = splinerod_energies::conformance::test_rods().expect("test rods");
+    let (_, rod) = rods.into_iter().next().expect("a rod");
+    let mut bending = Bending::new(1e-3).unwrap();
+    assert!(bending.begin_step(&rod, 1e-3).is_ok());
+    let lean = rod.without_second_derivatives();
+    let err = bending.begin_step(&lean, 1e-3).unwrap_err().to_string();
+    assert!(err.contains("second derivatives"), "{err}");
+    assert!(bending.supports(&lean).is_err());
+}

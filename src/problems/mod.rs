@@ -109,7 +109,8 @@ pub fn taut_string_with(n: usize, formulation: StretchFormulation) -> Result<Rod
     let basis = BSplineSpace::clamped_uniform(3, n, 1.0)?;
     let end = Vector3::new(1.2, 0.0, 0.0);
     let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?
-        .with_quadrature_points(formulation.points_per_span(3))?;
+        .with_quadrature_points(formulation.points_per_span(3))?
+        .without_second_derivatives();
     let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
     let mut stretching = Stretching::new(100.0)?;
     stretching.formulation = formulation;
@@ -224,7 +225,8 @@ pub fn pinned_cable_with(
     let basis = BSplineSpace::clamped_uniform(3, n, 1.0)?;
     let end = Vector3::new(span, 0.0, 0.0);
     let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?
-        .with_quadrature_points(formulation.points_per_span(3))?;
+        .with_quadrature_points(formulation.points_per_span(3))?
+        .without_second_derivatives();
     let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
     let mut stretching = Stretching::new(ea)?;
     stretching.formulation = formulation;

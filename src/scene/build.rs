@@ -122,8 +122,11 @@ impl Scene {
             && self.contact.is_none()
             && (!self.part_of_world || self.reduced_quadrature)
         {
+            // Nothing reads the basis' second derivatives either (only bending does).
             let formulation = StretchFormulation::Mixed;
-            rod = rod.with_quadrature_points(formulation.points_per_span(r.degree))?;
+            rod = rod
+                .with_quadrature_points(formulation.points_per_span(r.degree))?
+                .without_second_derivatives();
         }
         Ok(rod)
     }

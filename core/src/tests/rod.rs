@@ -188,3 +188,49 @@ fn bad_rods_are_rejected() {
     let e = Rod::new(m, Box::new(space), pts).unwrap_err();
     assert!(matches!(e, CoreError::NonFiniteState { index: 2, .. }));
 }
+
+/// A rod without second derivatives tabulates the same values and first derivatives,
+/// keeps leaving the second ones out through knot insertion, removal and refined copies,
+/// and says so.
+#[test]
+fn a_lean_table_keeps_everything_but_the_second_derivatives() {
+    let space = BSplineSpace::clamped_uniform(3, 12, 1.0).unwrap();
+    let full = bent_rod(&space).with_quadrature_points(4).unwrap();
+    let mut lean = bent_rod(&space)
+        .with_quadrature_points(4)
+        .unwrap()
+        .without_second_derivatives();
+    let same = |a: &Rod, b: &Rod| {
+        assert_eq!(a.quadrature().len(), b.quadrature().len());
+        for (p, q) in a.quadrature().points().zip(b.quadrature().points()) {
+            assert_eq!((p.s, p.weight, p.first), (q.s, q.weight, q.first));
+            assert_eq!((p.value, p.d1, p.lower), (q.value, q.d1, q.lower));
+        }
+        assert_eq!(a.mass_matrix().get(3, 4), b.mass_matrix().get(3, 4));
+    };
+    same(&full, &lean);
+    assert!(full.quadrature().has_second_derivatives());
+    let lean_everywhere = |rod: &Rod| {
+        assert!(!rod.quadrature().has_second_derivatives());
+        assert!(rod.quadrature().points().all(|p| p.d2.is_empty()));
+    };
+    lean_everywhere(&lean);
+    let mut full = full;
+    full.insert_knot(0.37).unwrap();
+    lean.insert_knot(0.37).unwrap();
+    same(&full, &lean);
+    lean_everywhere(&lean);
+    let mut op = crate::RefinementOperator::default();
+    let refined = lean.refined(&[0.5, 0.61], &mut op).unwrap();
+    lean_everywhere(&refined);
+    let knot = lean
+        .basis()
+        .knots()
+        .iter()
+        .position(|&t| t == 0.37)
+        .unwrap();
+    lean.remove_knot(knot, 1.0).unwrap();
+    lean_everywhere(&lean);
+    let lean = lean.with_quadrature_points(5).unwrap();
+    lean_everywhere(&lean);
+}
