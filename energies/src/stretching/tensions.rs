@@ -38,7 +38,7 @@ thread_local! {
     /// it was built for.
     static GRAM: RefCell<(usize, TensionGram)> = RefCell::new((0, TensionGram::default()));
     /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
-    static ROWS: RefCell<Rows> = RefCell::new(Rows::default());
+    static ROWS: RefCell<RowsCache> = RefCell::new(RowsCache::default());
     /// The table of a closed rod the energy's own does not match, and the energy (address)
     /// it was built for.
     static TABLE: RefCell<(usize, TensionTable)> = RefCell::new((0, TensionTable::default()));
@@ -67,6 +67,49 @@ struct Rows {
     /// A closed rod's distinct control points and degree: its split pairs `j`, `j + m`
     /// (`1 ≤ j < d`) have one lumped weight ([`super::seam`]).
     pairs: Option<(usize, usize)>,
+    /// Address of the energy whose slot this is ([`RowsCache`]).
+    owner: usize,
+}
+
+/// The rows of up to [`ROW_SLOTS`] energies (the rods of a joined system each have their
+/// own stretching: one slot would refill at every remainder product), replaced round
+/// robin beyond that.
+#[derive(Debug, Default)]
+struct RowsCache {
+    slots: Vec<Rows>,
+    next: usize,
+}
+
+/// Energies whose rows a thread keeps at once.
+const ROW_SLOTS: usize = 8;
+
+impl RowsCache {
+    /// The slot of `energy`, if it has one.
+    fn find(&self, energy: &Stretching) -> Option<&Rows> {
+        let owner = energy as *const Stretching as usize;
+        self.slots.iter().find(|r| r.owner == owner)
+    }
+
+    /// The rows of `energy` at `rod`'s state, filled if they are not.
+    fn filled(&mut self, energy: &Stretching, rod: &Rod) -> &mut Rows {
+        let owner = energy as *const Stretching as usize;
+        let index = match self.slots.iter().position(|r| r.owner == owner) {
+            Some(i) => i,
+            None if self.slots.len() < ROW_SLOTS => {
+                self.slots.push(Rows::default());
+                self.slots.len() - 1
+            }
+            None => {
+                self.next = (self.next + 1) % ROW_SLOTS;
+                self.next
+            }
+        };
+        let rows = &mut self.slots[index];
+        if !rows.hold(energy, rod) {
+            rows.fill(energy, rod);
+        }
+        rows
+    }
 }
 
 impl Rows {
@@ -96,6 +139,7 @@ impl Rows {
     /// Recomputes the rows of `energy` at `rod`'s state.
     fn fill(&mut self, energy: &Stretching, rod: &Rod) {
         self.key = None;
+        self.owner = energy as *const Stretching as usize;
         self.functions.clear();
         self.db.clear();
         energy.for_each_derivative(rod, |index, first, (m, b), db| {
@@ -233,11 +277,9 @@ impl Stretching {
         moments.resize(rod.len() + 1, (0.0, 0.0));
         if self.consistent() {
             // The rows of B come with the moments; the remainder products reuse them.
-            return ROWS.with(|rows| {
-                let mut rows = rows.borrow_mut();
-                if !rows.hold(self, rod) {
-                    rows.fill(self, rod);
-                }
+            return ROWS.with(|cache| {
+                let mut cache = cache.borrow_mut();
+                let rows = cache.filled(self, rod);
                 for &(index, _, _, m, b) in &rows.functions {
                     moments[index] = (b, m);
                 }
@@ -266,13 +308,13 @@ impl Stretching {
     pub(super) fn for_each_moment(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {
         let cached = self.consistent()
             && self.table.matches(rod)
-            && ROWS.with(|rows| {
-                let rows = rows.borrow();
-                let hold = rows.hold(self, rod);
-                if hold {
+            && ROWS.with(|cache| {
+                let cache = cache.borrow();
+                let rows = cache.find(self).filter(|rows| rows.hold(self, rod));
+                if let Some(rows) = rows {
                     rows.for_each_moment(&self.table, &mut f);
                 }
-                hold
+                rows.is_some()
             });
         if !cached {
             self.with_table(rod, |table| table.for_each(rod, f));
@@ -335,11 +377,9 @@ impl Stretching {
         if !self.consistent() {
             return;
         }
-        ROWS.with(|rows| {
-            let mut rows = rows.borrow_mut();
-            if !rows.hold(self, rod) {
-                rows.fill(self, rod);
-            }
+        ROWS.with(|cache| {
+            let mut cache = cache.borrow_mut();
+            let rows = cache.filled(self, rod);
             let c = scale * self.stiffness;
             rows.remainder(v, c, |y| self.solve_gram(rod, y), out);
         });
