@@ -123,3 +123,49 @@ fn error_estimates_do_not_allocate_after_warm_up() {
         );
     }
 }
+
+/// The batched ensemble step (#17) allocates nothing either: its lane buffers are per
+/// thread and kept, and each member's preloaded result reuses its integrator's buffers.
+#[test]
+fn batched_ensemble_steps_do_not_allocate_after_warm_up() {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let count = pool.install(|| {
+        let members = (0..8)
+            .map(|i| {
+                let system = pinned_cable_with(
+                    16,
+                    1.05,
+                    100.0 + 10.0 * i as Real,
+                    StretchFormulation::Mixed,
+                )
+                .expect("cable");
+                let euler = ImplicitEuler::new(NewtonParams::default()).expect("p");
+                Simulation::new(system, Box::new(euler))
+            })
+            .collect();
+        let mut ensemble = splinerod::Ensemble::new(members);
+        for _ in 0..10 {
+            ensemble.step(1e-3).expect("warm-up step");
+        }
+        let mut batched = 0;
+        let count = allocations_during(|| {
+            for _ in 0..100 {
+                ensemble.step(1e-3).expect("step");
+                batched += ensemble
+                    .reports
+                    .iter()
+                    .map(|r| r.solver.batched)
+                    .sum::<usize>();
+            }
+        });
+        assert_eq!(batched, 800, "every member-step batched");
+        count
+    });
+    assert_eq!(
+        count, 0,
+        "{count} allocations in 100 batched ensemble steps"
+    );
+}

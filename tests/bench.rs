@@ -22,6 +22,8 @@ fn quick_bench_reports_every_key() {
         "per_cp_flatness",
         "ensemble_rod_steps_per_s_1",
         "ensemble_rod_steps_per_s_all",
+        "ensemble_rod_steps_per_s_alone_1",
+        "batched_speedup",
         "parallel_efficiency",
         "threads",
         "bytes_per_cp",

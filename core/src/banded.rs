@@ -36,6 +36,12 @@ impl SymBanded {
         self.bandwidth
     }
 
+    /// The stored upper band: entry `(i, i + k)` at `i · (bandwidth + 1) + k` (slots past
+    /// the end of the matrix are zero).
+    pub fn band(&self) -> &[Real] {
+        &self.data
+    }
+
     /// Entry `(i, j)` (zero outside the band).
     pub fn get(&self, i: usize, j: usize) -> Real {
         let (i, j) = (i.min(j), i.max(j));

@@ -254,6 +254,18 @@ pub trait Energy: Send + Sync {
         None
     }
 
+    /// This energy on `rod` as a term the batched ensemble step evaluates for several
+    /// rods at once ([`crate::lanes`]), if it has such a form now; `None` (the default)
+    /// steps a rod with this energy on its own, with the same result. The term must
+    /// equal [`energy`](Energy::energy) and the exact
+    /// [`add_gradient_and_hessian`](Energy::add_gradient_and_hessian) up to round-off,
+    /// and [`begin_step`](Energy::begin_step) must be idempotent for an energy that has
+    /// one (the batched step calls it before the member's own step does).
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        let _ = rod;
+        None
+    }
+
     /// Statistics of the current state for reports; the default reports nothing.
     fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
         let _ = rod;

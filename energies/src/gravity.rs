@@ -45,4 +45,11 @@ impl Energy for Gravity {
     }
 
     fn add_hessian(&self, _rod: &Rod, _kind: HessianKind, _hessian: &mut BlockBanded) {}
+
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        Some(crate::LaneTerm::Gravity {
+            g: self.g,
+            masses: rod.lumped_masses(),
+        })
+    }
 }

@@ -10,16 +10,12 @@
 //! same band); each lane's result equals the scalar factorisation's up to round-off.
 
 use crate::IntegratorError;
-use splinerod_core::{BlockBanded, Real};
-
-/// Matrices factorised together.
-pub const LANES: usize = 4;
-
-/// One scalar per lane.
-pub type Lanes = [Real; LANES];
+use splinerod_core::lanes::{LaneBlock, ZERO};
+use splinerod_core::{BlockBanded, LaneBand};
+pub use splinerod_core::{Lanes, LANES};
 
 /// A 3×3 block per lane, column-major: entry `(r, c)` at `3c + r`.
-type Block = [Lanes; 9];
+type Block = LaneBlock;
 
 /// The factors `U` of [`LANES`] block-banded SPD matrices of the same size and bandwidth.
 #[derive(Debug, Clone, Default)]
@@ -28,7 +24,8 @@ pub struct BatchedBandedCholesky {
     bw: usize,
     /// `U_{i,i+k}` at `i·(bw+1) + k`; the diagonal slots hold \\(U_{ii}^{-T}\\) (lower
     /// triangular), as in [`crate::banded_cholesky`].
-    u: Vec<Block>,
+    u: LaneBand,
+    factored: bool,
 }
 
 fn not_definite() -> IntegratorError {
@@ -49,55 +46,102 @@ impl BatchedBandedCholesky {
                 "batched matrices must share one band shape without far blocks",
             ));
         }
-        (self.n, self.bw) = (n, bw);
-        let w = bw + 1;
-        self.u.clear();
-        self.u.resize(n * w, [[0.0; LANES]; 9]);
-        for (lane, m) in a.iter().enumerate() {
-            for (slot, block) in self.u.iter_mut().zip(m.band_blocks()) {
-                for (e, &v) in slot.iter_mut().zip(block.as_slice()) {
-                    e[lane] = v;
+        let mut band = std::mem::take(&mut self.u);
+        band.reset(n, bw);
+        for i in 0..n {
+            for (k, slot) in band.row_mut(i).iter_mut().enumerate() {
+                for (lane, m) in a.iter().enumerate() {
+                    for (e, &v) in slot.iter_mut().zip(m.upper(i, k).as_slice()) {
+                        e[lane] = v;
+                    }
                 }
             }
         }
-        factor_lanes(&mut self.u, n, bw)
+        self.u = band;
+        self.factor_in_place()
+            .iter()
+            .all(|&ok| ok)
+            .then_some(())
+            .ok_or_else(not_definite)
+    }
+
+    /// Factorises the lane matrices of `a`; returns per lane whether it was positive
+    /// definite. A lane that was not holds a factor of no use (finite, with unit pivots
+    /// from its failure on), and [`Self::solve_in_place`] gives it a meaningless step.
+    ///
+    /// The factor takes `a`'s storage, and `a` is left with the previous factor's (of no
+    /// use but to be reset and assembled again): no copy, no allocation.
+    pub fn factor_band(&mut self, a: &mut LaneBand) -> [bool; LANES] {
+        std::mem::swap(&mut self.u, a);
+        self.factor_in_place()
+    }
+
+    fn factor_in_place(&mut self) -> [bool; LANES] {
+        (self.n, self.bw) = (self.u.dim(), self.u.bandwidth());
+        self.factored = true;
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked on the line above).
+            return unsafe { factor_lanes_avx2(&mut self.u, self.n, self.bw) };
+        }
+        factor_lanes(&mut self.u, self.n, self.bw)
     }
 
     /// Solves `A x = b` in place for every lane: `x[3i + c]` holds coordinate `c` of
     /// control point `i`, one value per lane.
     pub fn solve_in_place(&self, x: &mut [Lanes]) -> Result<(), IntegratorError> {
-        if x.len() != 3 * self.n || self.u.is_empty() {
+        if x.len() != 3 * self.n || !self.factored {
             return Err(IntegratorError::SolverState(
                 "solve before a successful factor, or a right-hand side of another size",
             ));
         }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked on the line above).
+            unsafe { self.solve_avx2(x) };
+            return Ok(());
+        }
+        self.substitute(x);
+        Ok(())
+    }
+
+    /// [`Self::substitute`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn solve_avx2(&self, x: &mut [Lanes]) {
+        self.substitute(x);
+    }
+
+    /// The two triangular solves with the factor.
+    #[inline(always)]
+    fn substitute(&self, x: &mut [Lanes]) {
         let w = self.bw + 1;
+        let u = self.u.blocks();
         // Uᵀ y = b.
         for i in 0..self.n {
             let mut r = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
             for k in i.saturating_sub(self.bw)..i {
                 let y = [x[3 * k], x[3 * k + 1], x[3 * k + 2]];
-                sub_product(&mut r, &self.u[k * w + (i - k)], &y, true);
+                sub_product(&mut r, &u[k * w + (i - k)], &y, true);
             }
-            x[3 * i..3 * i + 3].copy_from_slice(&product(&self.u[i * w], &r, false));
+            x[3 * i..3 * i + 3].copy_from_slice(&product(&u[i * w], &r, false));
         }
         // U x = y.
         for i in (0..self.n).rev() {
             let mut r = [x[3 * i], x[3 * i + 1], x[3 * i + 2]];
             for j in i + 1..(i + w).min(self.n) {
                 let y = [x[3 * j], x[3 * j + 1], x[3 * j + 2]];
-                sub_product(&mut r, &self.u[i * w + (j - i)], &y, false);
+                sub_product(&mut r, &u[i * w + (j - i)], &y, false);
             }
-            x[3 * i..3 * i + 3].copy_from_slice(&product(&self.u[i * w], &r, true));
+            x[3 * i..3 * i + 3].copy_from_slice(&product(&u[i * w], &r, true));
         }
-        Ok(())
     }
 }
 
 /// `m v` (or `mᵀ v` with `transposed`), lane by lane.
 #[inline(always)]
 fn product(m: &Block, v: &[Lanes; 3], transposed: bool) -> [Lanes; 3] {
-    let mut out = [[0.0; LANES]; 3];
+    let mut out = [ZERO; 3];
     sub_product(&mut out, m, v, transposed);
     out.map(|row| row.map(|x| -x))
 }
@@ -138,7 +182,7 @@ fn sub_transposed_times(m: &mut Block, a: &Block, b: &Block) {
 /// `l⁻¹ m` for a lower-triangular `l` (stored as a full block), lane by lane.
 #[inline(always)]
 fn times(l: &Block, m: &Block) -> Block {
-    let mut out = [[0.0; LANES]; 9];
+    let mut out = [ZERO; 9];
     for c in 0..3 {
         for r in 0..3 {
             for k in 0..3 {
@@ -153,9 +197,10 @@ fn times(l: &Block, m: &Block) -> Block {
 }
 
 /// The inverse of the lower Cholesky factor of the symmetric 3×3 block `s`, lane by
-/// lane; `None` if a pivot is not positive.
-fn inverse_cholesky(s: &Block) -> Option<Block> {
-    let mut out = [[0.0; LANES]; 9];
+/// lane; a lane whose pivots are not positive gets the identity and `false` in `ok`.
+#[inline(always)]
+fn inverse_cholesky(s: &Block, ok: &mut [bool; LANES]) -> Block {
+    let mut out = [ZERO; 9];
     for l in 0..LANES {
         let at = |r: usize, c: usize| s[3 * c + r][l];
         let l00 = at(0, 0).sqrt();
@@ -168,21 +213,33 @@ fn inverse_cholesky(s: &Block) -> Option<Block> {
         let m10 = -l10 * a * b;
         let m21 = -l21 * b * c;
         let m20 = -(l20 * a + l21 * m10) * c;
-        let inverse = [a, m10, m20, 0.0, b, m21, 0.0, 0.0, c];
-        if !inverse.iter().all(|x| x.is_finite()) {
-            return None;
+        let mut inverse = [a, m10, m20, 0.0, b, m21, 0.0, 0.0, c];
+        if !ok[l] || !inverse.iter().all(|x| x.is_finite()) {
+            ok[l] = false;
+            inverse = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
         }
         for (e, v) in out.iter_mut().zip(inverse) {
             e[l] = v;
         }
     }
-    Some(out)
+    out
 }
 
-/// The factorisation of [`crate::banded_cholesky`], every lane at once.
-fn factor_lanes(u: &mut [Block], n: usize, bw: usize) -> Result<(), IntegratorError> {
+/// [`factor_lanes`] compiled for AVX2 (four lanes per instruction instead of two).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn factor_lanes_avx2(band: &mut LaneBand, n: usize, bw: usize) -> [bool; LANES] {
+    factor_lanes(band, n, bw)
+}
+
+/// The factorisation of [`crate::banded_cholesky`], every lane at once; per lane whether
+/// its matrix was positive definite.
+#[inline(always)]
+fn factor_lanes(band: &mut LaneBand, n: usize, bw: usize) -> [bool; LANES] {
     let w = bw + 1;
+    let mut ok = [true; LANES];
     for i in 0..n {
+        let u = band.blocks_mut();
         let (done, rest) = u.split_at_mut(i * w);
         let len = w.min(rest.len());
         let row = &mut rest[..len];
@@ -191,17 +248,23 @@ fn factor_lanes(u: &mut [Block], n: usize, bw: usize) -> Result<(), IntegratorEr
             let uki = &done[k * w + (i - k)];
             sub_transposed_times(&mut s, uki, uki);
         }
-        let linv = inverse_cholesky(&s).ok_or_else(not_definite)?;
+        let linv = inverse_cholesky(&s, &mut ok);
         row[0] = linv;
         for j in i + 1..(i + w).min(n) {
             let mut m = row[j - i];
             for k in j.saturating_sub(bw)..i {
                 sub_transposed_times(&mut m, &done[k * w + (i - k)], &done[k * w + (j - k)]);
             }
-            row[j - i] = times(&linv, &m);
+            let mut product = times(&linv, &m);
+            if !ok.iter().all(|&ok| ok) {
+                for l in (0..LANES).filter(|&l| !ok[l]) {
+                    product.iter_mut().for_each(|e| e[l] = 0.0);
+                }
+            }
+            row[j - i] = product;
         }
     }
-    Ok(())
+    ok
 }
 
 #[cfg(test)]
@@ -209,6 +272,7 @@ mod tests {
     use super::*;
     use crate::banded_cholesky::BandedCholesky;
     use nalgebra::Matrix3;
+    use splinerod_core::Real;
 
     /// A block-banded SPD matrix: a band of pseudo-random blocks made diagonally
     /// dominant, different per `seed`.

@@ -311,6 +311,25 @@ impl Stepper {
         }
     }
 
+    /// Takes a step solved elsewhere (the batched form, [`crate::lane_euler`]) as this
+    /// scheme's own: checks and saves the start as [`Self::begin`] does, writes the end
+    /// state and keeps the pin forces; `finish` then checks it like a solved step.
+    pub fn accept(
+        &mut self,
+        system: &mut dyn System,
+        outcome: &crate::lane_euler::LaneOutcome<'_>,
+        dt: Real,
+    ) -> Result<StepStats, IntegratorError> {
+        self.begin(system, dt)?;
+        let rod = system.rod_mut();
+        rod.positions.copy_from_slice(outcome.positions);
+        rod.velocities.copy_from_slice(outcome.velocities);
+        self.beta = dt;
+        let forces = outcome.pin_forces.iter().map(|f| f * dt);
+        self.workspace.set_multipliers(forces);
+        Ok(outcome.stats)
+    }
+
     /// Forces the pins exerted on the rod during the last step, N: the KKT multipliers
     /// divided by β, since the momentum balance reads \(M(x - \hat v) = \beta(f + G^T\lambda)\).
     pub fn pin_forces(&self) -> Vec<Vector3<Real>> {

@@ -36,6 +36,7 @@ mod error;
 mod implicit_euler;
 mod incremental;
 mod kkt;
+pub mod lane_euler;
 pub mod linear;
 mod low_rank;
 mod midpoint;
@@ -138,11 +139,14 @@ pub struct StepStats {
     /// Conjugate-gradient iterations correcting Newton steps for a Hessian remainder
     /// ([`System::add_hessian_remainder`]).
     pub remainder_iterations: usize,
+    /// Steps whose solve the batched ensemble step took ([`lane_euler`]; 1 for such a
+    /// step, summed over sequences).
+    pub batched: usize,
 }
 
 impl StepStats {
     /// Adds the counters of `other` (iterations, analyses, cuts, continuation steps,
-    /// multiplier updates) and takes its residual; what `converged` means for the sum is
+    /// multiplier updates, batched steps) and takes its residual; what `converged` means for the sum is
     /// the caller's choice.
     pub fn add_counts(&mut self, other: &StepStats) {
         self.newton_iterations += other.newton_iterations;
@@ -151,6 +155,7 @@ impl StepStats {
         self.continuation_steps += other.continuation_steps;
         self.multiplier_updates += other.multiplier_updates;
         self.remainder_iterations += other.remainder_iterations;
+        self.batched += other.batched;
         self.residual = other.residual;
     }
 }
@@ -192,6 +197,25 @@ pub trait Integrator: Send + Sync {
     /// the integrator does not compute them).
     fn pin_forces(&self) -> Vec<Vector3<Real>> {
         Vec::new()
+    }
+    /// The Newton settings with which this scheme's step is the batched implicit Euler
+    /// step ([`lane_euler`]): an ensemble steps the members whose schemes have them
+    /// several at once and hands each its result ([`preload`](Integrator::preload)).
+    /// Default `None`: the scheme has no batched form.
+    fn lane_params(&self) -> Option<NewtonParams> {
+        None
+    }
+    /// Hands the scheme the step of `dt` the batched form took from the state
+    /// `start` (positions, velocities): the next [`step`](Integrator::step) of the same
+    /// `dt` from exactly that state takes it (with its checks and counters) instead of
+    /// solving; any other step ignores it. Default: ignored.
+    fn preload(
+        &mut self,
+        start: (&[Vector3<Real>], &[Vector3<Real>]),
+        outcome: &lane_euler::LaneOutcome<'_>,
+        dt: Real,
+    ) {
+        let _ = (start, outcome, dt);
     }
     /// Appends what the scheme keeps between steps (a multistep scheme's history), for a
     /// checkpoint ([`splinerod_core::state`]). Default: nothing.

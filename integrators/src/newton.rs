@@ -191,6 +191,12 @@ impl NewtonWorkspace {
         &self.multipliers
     }
 
+    /// Sets the multipliers to those of a step taken elsewhere (a batched step).
+    pub(crate) fn set_multipliers(&mut self, mu: impl Iterator<Item = Vector3<Real>>) {
+        self.multipliers.clear();
+        self.multipliers.extend(mu);
+    }
+
     /// The Newton matrix buffer (scratch between solves).
     pub(crate) fn matrix_mut(&mut self) -> &mut BlockBanded {
         self.solver.matrix_mut()

@@ -50,8 +50,14 @@ pub struct BenchResult {
     pub per_cp_ns: BTreeMap<String, Real>,
     /// Largest over smallest of `per_cp_ns`.
     pub per_cp_flatness: Real,
-    /// Ensemble rod-steps per second on one thread.
+    /// Ensemble rod-steps per second on one thread (batched, the default).
     pub ensemble_rod_steps_per_s_1: Real,
+    /// The same ensemble with every member stepped alone ([`crate::Ensemble::batched`]
+    /// off), one thread.
+    pub ensemble_rod_steps_per_s_alone_1: Real,
+    /// `ensemble_rod_steps_per_s_1 / ensemble_rod_steps_per_s_alone_1`: what solving
+    /// members four at a time gains.
+    pub batched_speedup: Real,
     /// Ensemble rod-steps per second on all threads.
     pub ensemble_rod_steps_per_s_all: Real,
     /// `all / (1 · threads)`.
@@ -154,8 +160,9 @@ fn per_cp(n: usize, reps: usize) -> Result<(Real, Real), Error> {
     Ok((ns, grown / n as Real))
 }
 
-/// Rod-steps per second of `count` 16-point cables stepped together on `threads` threads.
-fn ensemble_rate(count: usize, steps: usize, threads: usize) -> Result<Real, Error> {
+/// Rod-steps per second of `count` 16-point cables stepped together on `threads` threads
+/// (`batched`: members solved four at a time, [`crate::Ensemble::batched`]).
+fn ensemble_rate(count: usize, steps: usize, threads: usize, batched: bool) -> Result<Real, Error> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -170,6 +177,7 @@ fn ensemble_rate(count: usize, steps: usize, threads: usize) -> Result<Real, Err
             })
             .collect::<Result<Vec<_>, Error>>()?;
         let mut ensemble = Ensemble::new(members);
+        ensemble.batched = batched;
         ensemble.step(1e-3)?;
         let t = Instant::now();
         for _ in 0..steps {
@@ -249,8 +257,9 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         });
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (count, steps) = (scale(10_000, 1_000), scale(10, 3));
-    let one = ensemble_rate(count, steps, 1)?;
-    let all = ensemble_rate(count, steps, threads)?;
+    let alone = ensemble_rate(count, steps, 1, false)?;
+    let one = ensemble_rate(count, steps, 1, true)?;
+    let all = ensemble_rate(count, steps, threads, true)?;
     let (settle, n, error, steps) = stiff_catenary()?;
     let hard_cases_total = crate::problems::hard_cases::hard_cases()?.len();
     let (checkpoint_s, checkpoint_bytes) =
@@ -267,6 +276,8 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         per_cp_ns,
         per_cp_flatness: hi / lo,
         ensemble_rod_steps_per_s_1: one,
+        ensemble_rod_steps_per_s_alone_1: alone,
+        batched_speedup: one / alone,
         ensemble_rod_steps_per_s_all: all,
         parallel_efficiency: all / (one * threads as Real),
         threads,

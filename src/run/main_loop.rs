@@ -128,7 +128,7 @@ pub(crate) fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Ru
     }
     Ok(Run {
         members,
-        ensemble: Ensemble::new(sims),
+        ensemble: ensemble_of(scene, sims, only),
         step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
         stage: 0,
         wall_before: 0.0,
@@ -212,12 +212,22 @@ pub(crate) fn restored_run(
     }
     Ok(Run {
         members,
-        ensemble: Ensemble::new(sims),
+        ensemble: ensemble_of(scene, sims, only.as_ref()),
         step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
         stage: stages,
         wall_before: 0.0,
         only,
     })
+}
+
+/// The ensemble of `sims` (batched as `scene` says), numbered from the first member of
+/// `only` (a shard's), so that it batches its members as a run of the whole ensemble
+/// does.
+fn ensemble_of(scene: &Scene, sims: Vec<Simulation>, only: Option<&Range<usize>>) -> Ensemble {
+    let mut ensemble = Ensemble::new(sims);
+    ensemble.first_index = only.map_or(0, |r| r.start);
+    ensemble.batched = scene.ensemble.as_ref().is_none_or(|e| e.batched);
+    ensemble
 }
 
 /// A checkpoint of `members` members that does not fit the scene and command line.
@@ -296,6 +306,7 @@ pub(crate) fn stage(
     let Ensemble {
         members: sims,
         reports,
+        ..
     } = &mut run.ensemble;
     for ((m, sim), report) in run
         .members

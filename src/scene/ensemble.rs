@@ -29,6 +29,14 @@ pub struct EnsembleSpec {
     /// holds, m. Default 0.
     #[serde(default)]
     pub perturbation: f64,
+    /// Solve the steps of members that share a shape four at a time
+    /// ([`crate::Ensemble::batched`]; the same results up to round-off). Default true.
+    #[serde(default = "batched_default")]
+    pub batched: bool,
+}
+
+fn batched_default() -> bool {
+    true
 }
 
 fn range(field: &str, r: Option<[f64; 2]>, zero_allowed: bool) -> Result<(), Error> {

@@ -30,12 +30,15 @@
 //! [`Stretching::inextensible`] holds that projection at zero ([`multipliers`]).
 
 mod gram;
+mod lanes;
 mod mixed;
 mod multipliers;
 mod seam;
 mod table;
 mod tensions;
 
+pub(crate) use lanes::add_moment_lanes;
+pub use lanes::MomentTerm;
 pub use multipliers::Multipliers;
 
 use crate::Energy;
@@ -321,6 +324,10 @@ fn tangent(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> Vector3<Real> {
 }
 
 impl Energy for Stretching {
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        self.moment_term(rod)
+    }
+
     fn name(&self) -> &str {
         "stretch"
     }

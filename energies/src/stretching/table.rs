@@ -151,6 +151,30 @@ impl TensionTable {
         }
     }
 
+    /// Number of tension functions tabulated (`n − 1`).
+    pub fn functions(&self) -> usize {
+        self.first.len()
+    }
+
+    /// Function `index − 1`'s first control point, width, weight \(m_k\) and packed
+    /// `G_k` (see [`Moment::entry`]).
+    #[inline]
+    pub fn function(&self, slot: usize) -> (usize, usize, Real, &[Real]) {
+        let g = &self.g[slot * self.stride..(slot + 1) * self.stride];
+        (self.first[slot], self.width[slot], self.m[slot], g)
+    }
+
+    /// Row starts of the packed blocks.
+    pub fn rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// Whether `other` places its functions on the same control points with the same
+    /// packing (the tables of rods with the same knots do).
+    pub fn same_shape(&self, other: &TensionTable) -> bool {
+        (self.first == other.first && self.width == other.width) && self.rows == other.rows
+    }
+
     /// The weight \(m_k\) of function `index` (`1 ..= n − 1`).
     #[inline]
     pub fn weight(&self, index: usize) -> Real {

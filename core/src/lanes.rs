@@ -1,0 +1,152 @@
+//! Structure-of-arrays storage for stepping [`LANES`] rods of one shape at once (batched
+//! ensembles, #17): every scalar holds one value per rod ("lane"), so each arithmetic
+//! operation of an assembly or a factorisation runs over the lanes in one loop the
+//! compiler vectorises.
+//!
+//! A field of 3-vectors over `n` control points is a `[Lanes]` of length `3n`, coordinate
+//! `c` of point `i` at `3i + c`. A [`LaneBand`] is the lane form of
+//! [`crate::BlockBanded`]'s band: block `(i, i + k)`, `0 ≤ k ≤ bw`, at `i · (bw + 1) + k`,
+//! each block column-major (entry `(r, c)` at `3c + r`).
+
+use crate::Real;
+
+/// Rods stepped together.
+pub const LANES: usize = 4;
+
+/// One scalar per lane.
+pub type Lanes = [Real; LANES];
+
+/// A 3×3 block per lane, column-major: entry `(r, c)` at `3c + r`.
+pub type LaneBlock = [Lanes; 9];
+
+/// Zero in every lane.
+pub const ZERO: Lanes = [0.0; LANES];
+
+/// The upper band of [`LANES`] symmetric block-banded matrices of one size and bandwidth.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LaneBand {
+    n: usize,
+    bw: usize,
+    blocks: Vec<LaneBlock>,
+}
+
+impl LaneBand {
+    /// Resizes to `n × n` blocks of bandwidth `bw` and zeroes every block (no allocation
+    /// once grown to the size).
+    pub fn reset(&mut self, n: usize, bw: usize) {
+        (self.n, self.bw) = (n, bw);
+        self.blocks.clear();
+        self.blocks.resize(n * (bw + 1), [ZERO; 9]);
+    }
+
+    /// Dimension in blocks.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Block bandwidth.
+    pub fn bandwidth(&self) -> usize {
+        self.bw
+    }
+
+    /// Blocks `(i, i ..= i + bw)` (fewer at the end of the matrix).
+    #[inline]
+    pub fn row_mut(&mut self, i: usize) -> &mut [LaneBlock] {
+        let w = self.bw + 1;
+        let len = w.min(self.n - i);
+        &mut self.blocks[i * w..i * w + len]
+    }
+
+    /// Blocks `(i, i ..= i + bw)` (fewer at the end of the matrix).
+    #[inline]
+    pub fn row(&self, i: usize) -> &[LaneBlock] {
+        let w = self.bw + 1;
+        let len = w.min(self.n - i);
+        &self.blocks[i * w..i * w + len]
+    }
+
+    /// Every stored block, rows of `bw + 1` slots (slots past the end of the matrix are
+    /// zero).
+    pub fn blocks(&self) -> &[LaneBlock] {
+        &self.blocks
+    }
+
+    /// Every stored block, mutably (layout of [`Self::blocks`]).
+    pub fn blocks_mut(&mut self) -> &mut [LaneBlock] {
+        &mut self.blocks
+    }
+
+    /// Block `(i, j)` of the full symmetric matrix (the transpose of the stored `(j, i)`
+    /// below the diagonal; zero outside the band).
+    pub fn block(&self, i: usize, j: usize) -> LaneBlock {
+        let (lo, hi) = (i.min(j), i.max(j));
+        if hi - lo > self.bw || hi >= self.n {
+            return [ZERO; 9];
+        }
+        let b = self.blocks[lo * (self.bw + 1) + hi - lo];
+        if i <= j {
+            b
+        } else {
+            std::array::from_fn(|e| b[3 * (e % 3) + e / 3])
+        }
+    }
+
+    /// Whether every entry of every lane is finite.
+    pub fn is_finite(&self) -> bool {
+        self.blocks
+            .iter()
+            .flatten()
+            .flatten()
+            .all(|x| x.is_finite())
+    }
+}
+
+/// `a + b`, lane by lane.
+#[inline(always)]
+pub fn add(a: Lanes, b: Lanes) -> Lanes {
+    std::array::from_fn(|l| a[l] + b[l])
+}
+
+/// `a − b`, lane by lane.
+#[inline(always)]
+pub fn sub(a: Lanes, b: Lanes) -> Lanes {
+    std::array::from_fn(|l| a[l] - b[l])
+}
+
+/// `a · b`, lane by lane.
+#[inline(always)]
+pub fn mul(a: Lanes, b: Lanes) -> Lanes {
+    std::array::from_fn(|l| a[l] * b[l])
+}
+
+/// `acc += a · b`, lane by lane.
+#[inline(always)]
+pub fn mul_add(acc: &mut Lanes, a: Lanes, b: Lanes) {
+    for l in 0..LANES {
+        acc[l] += a[l] * b[l];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_below_the_diagonal_are_transposes_and_outside_the_band_zero() {
+        let mut band = LaneBand::default();
+        band.reset(4, 1);
+        band.row_mut(1)[1] = std::array::from_fn(|e| [e as Real; LANES]);
+        let upper = band.block(1, 2);
+        let lower = band.block(2, 1);
+        for r in 0..3 {
+            for c in 0..3 {
+                assert_eq!(upper[3 * c + r], lower[3 * r + c]);
+            }
+        }
+        assert_eq!(band.block(0, 3), [ZERO; 9]);
+        assert_eq!(band.row(3).len(), 1);
+        assert!(band.is_finite());
+        band.row_mut(0)[0][4][2] = Real::NAN;
+        assert!(!band.is_finite());
+    }
+}

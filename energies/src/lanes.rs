@@ -1,0 +1,229 @@
+//! Energies of [`LANES`] rods of one shape evaluated at once, structure of arrays (the
+//! batched ensemble step, #17; storage in [`splinerod_core::lanes`]).
+//!
+//! An energy joins the batched step by describing itself as a [`LaneTerm`]
+//! ([`crate::Energy::lane_term`]): a form whose evaluation is written once for all lanes.
+//! The forms are
+//!
+//! - **gravity** on the lumped masses, \\(E = -\sum_i m_i\, g \cdot q_i\\) (gradient
+//!   \\(-m_i g\\), no Hessian);
+//! - the **lumped mixed stretching** from its tabulated moments ([`crate::Stretching`]
+//!   with [`crate::StretchFormulation::Mixed`]): per tension function `k`,
+//!   \\(b_k = \tfrac12 q^T G_k q - \tfrac12 m_k\\), tension
+//!   \\(\lambda_k = \hat\lambda_k + \tfrac{EA}{m_k} b_k\\),
+//!   \\(E = \sum_k \tfrac12(\lambda_k + \hat\lambda_k) b_k\\), gradient
+//!   \\(\sum_k \lambda_k \partial b_k\\) and Hessian
+//!   \\(\sum_k \tfrac{EA}{m_k} \partial b_k \partial b_k^T + \lambda_k G_k \otimes I\\)
+//!   (each lane with its own table, stiffness and multipliers).
+//!
+//! Each lane's result equals the energy's own evaluation up to round-off (the same sums,
+//! associated alike; the tests compare them). An energy that is not one of these forms
+//! returns `None` and its rod is stepped on its own, with the same result.
+
+use crate::stretching::MomentTerm;
+use nalgebra::Vector3;
+use splinerod_core::{LaneBand, Lanes, Real, LANES};
+
+/// An energy in a form the batched step evaluates for several rods at once.
+#[derive(Debug, Clone, Copy)]
+pub enum LaneTerm<'a> {
+    /// \\(E = -\sum_i m_i\, g \cdot q_i\\).
+    Gravity {
+        /// Acceleration, m/s².
+        g: Vector3<Real>,
+        /// The rod's lumped masses, kg.
+        masses: &'a [Real],
+    },
+    /// The lumped mixed stretching's tabulated moments.
+    Moments(MomentTerm<'a>),
+}
+
+impl LaneTerm<'_> {
+    /// Whether `other` is the same form (variant).
+    pub fn same_form(&self, other: &LaneTerm<'_>) -> bool {
+        std::mem::discriminant(self) == std::mem::discriminant(other)
+    }
+
+    /// Whether `terms` (one per lane) are one form on one shape: `n` control points and
+    /// a Hessian within block bandwidth `bw`.
+    pub fn compatible(terms: &[LaneTerm<'_>; LANES], n: usize, bw: usize) -> bool {
+        terms.iter().all(|t| match (t, &terms[0]) {
+            (LaneTerm::Gravity { masses, .. }, LaneTerm::Gravity { .. }) => masses.len() == n,
+            (LaneTerm::Moments(a), LaneTerm::Moments(b)) => a.fits(n, bw) && a.same_shape(b),
+            _ => false,
+        })
+    }
+}
+
+/// Positions, or any field of 3-vectors, in lane form: coordinate `c` of point `i` at
+/// `3i + c`.
+pub type LaneField = [Lanes];
+
+/// Adds to `energy` each lane's energy of `terms` (compatible, see
+/// [`LaneTerm::compatible`]) at the positions `q`, and with `derivatives` its gradient and
+/// exact Hessian. No allocation.
+pub fn add_lanes(
+    terms: &[LaneTerm<'_>; LANES],
+    q: &LaneField,
+    energy: &mut Lanes,
+    derivatives: Option<(&mut LaneField, &mut LaneBand)>,
+) {
+    match &terms[0] {
+        LaneTerm::Gravity { .. } => add_gravity(terms, q, energy, derivatives.map(|d| d.0)),
+        LaneTerm::Moments(_) => {
+            let moments: [&MomentTerm<'_>; LANES] = std::array::from_fn(|l| match &terms[l] {
+                LaneTerm::Moments(m) => m,
+                LaneTerm::Gravity { .. } => unreachable!("lane terms checked compatible"),
+            });
+            crate::stretching::add_moment_lanes(moments, q, energy, derivatives);
+        }
+    }
+}
+
+/// Gravity's energy and gradient, lane by lane.
+fn add_gravity(
+    terms: &[LaneTerm<'_>; LANES],
+    q: &LaneField,
+    energy: &mut Lanes,
+    gradient: Option<&mut LaneField>,
+) {
+    let mut gravity = [(Vector3::zeros(), &[][..]); LANES];
+    for (slot, term) in gravity.iter_mut().zip(terms) {
+        if let LaneTerm::Gravity { g, masses } = term {
+            *slot = (*g, masses);
+        }
+    }
+    for (l, (g, masses)) in gravity.iter().enumerate() {
+        let mut sum = 0.0;
+        for (i, m) in masses.iter().enumerate() {
+            let qi = Vector3::new(q[3 * i][l], q[3 * i + 1][l], q[3 * i + 2][l]);
+            sum += m * g.dot(&qi);
+        }
+        energy[l] -= sum;
+    }
+    if let Some(gradient) = gradient {
+        for (l, (g, masses)) in gravity.iter().enumerate() {
+            for (i, m) in masses.iter().enumerate() {
+                for c in 0..3 {
+                    gradient[3 * i + c][l] -= g[c] * m;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Energy, Gravity, Stretching};
+    use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, LaneBand, Material, Rod};
+
+    /// Four rods of one basis, bent and stretched differently.
+    fn rods(degree: usize) -> Vec<Rod> {
+        (0..LANES)
+            .map(|l| {
+                let material = Material {
+                    rest_length: 1.0,
+                    linear_density: 0.1 + 0.02 * l as Real,
+                };
+                let basis = BSplineSpace::clamped_uniform(degree, 11, 1.0).expect("basis");
+                let end = Vector3::new(1.0, 0.0, 0.0);
+                let mut rod =
+                    Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
+                for (i, p) in rod.positions.iter_mut().enumerate() {
+                    let t = (i * 7 + l * 3) as Real;
+                    *p = *p * (1.1 + 0.05 * l as Real)
+                        + Vector3::new(0.01 * t.sin(), 0.05 * (0.3 * t).cos(), 0.02 * t.cos());
+                }
+                rod
+            })
+            .collect()
+    }
+
+    /// Lane evaluation of one energy per rod against each energy's own.
+    fn check(rods: &[Rod], energies: &[Box<dyn Energy>]) {
+        let n = rods[0].len();
+        let bw = energies[0].bandwidth(&rods[0]);
+        let terms: [LaneTerm<'_>; LANES] =
+            std::array::from_fn(|l| energies[l].lane_term(&rods[l]).expect("lane form"));
+        assert!(LaneTerm::compatible(&terms, n, bw));
+        let q: Vec<Lanes> = (0..3 * n)
+            .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
+            .collect();
+        let (mut energy, mut gradient, mut band) =
+            ([0.0; LANES], vec![[0.0; LANES]; 3 * n], LaneBand::default());
+        band.reset(n, bw);
+        add_lanes(&terms, &q, &mut energy, Some((&mut gradient, &mut band)));
+        for (l, (rod, e)) in rods.iter().zip(energies).enumerate() {
+            let close = |a: Real, b: Real, scale: Real| (a - b).abs() <= 1e-12 * scale;
+            assert!(
+                close(energy[l], e.energy(rod), e.energy(rod).abs()),
+                "lane {l} energy"
+            );
+            let mut g = vec![Vector3::zeros(); n];
+            let mut h = BlockBanded::zeros(n, bw);
+            e.add_gradient_and_hessian(rod, HessianKind::Exact, &mut g, &mut h);
+            let gscale = g.iter().map(|v| v.amax()).fold(1e-300, Real::max);
+            for (k, lanes) in gradient.iter().enumerate() {
+                assert!(
+                    close(lanes[l], g[k / 3][k % 3], gscale),
+                    "lane {l} gradient {k}"
+                );
+            }
+            let hscale = h
+                .band_blocks()
+                .iter()
+                .map(|b| b.amax())
+                .fold(1e-300, Real::max);
+            for i in 0..n {
+                for j in i..(i + bw + 1).min(n) {
+                    let (lane, own) = (band.block(i, j), h.block(i, j));
+                    for e in 0..9 {
+                        let (r, c) = (e % 3, e / 3);
+                        assert!(
+                            close(lane[e][l], own[(r, c)], hscale),
+                            "lane {l} block ({i}, {j})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lane_terms_equal_each_energys_own_evaluation() {
+        for degree in 2..=5 {
+            let rods = rods(degree);
+            let stretching: Vec<Box<dyn Energy>> = rods
+                .iter()
+                .enumerate()
+                .map(|(l, rod)| {
+                    let mut s = Stretching::new(50.0 + 30.0 * l as Real).expect("stretching");
+                    s.begin_step(rod, 1e-3).expect("table");
+                    Box::new(s) as Box<dyn Energy>
+                })
+                .collect();
+            check(&rods, &stretching);
+            let gravity: Vec<Box<dyn Energy>> = (0..LANES)
+                .map(|l| {
+                    let g = Vector3::new(0.1 * l as Real, -9.81, 0.5);
+                    Box::new(Gravity::new(g).expect("gravity")) as Box<dyn Energy>
+                })
+                .collect();
+            check(&rods, &gravity);
+        }
+    }
+
+    #[test]
+    fn only_the_lumped_mixed_stretching_on_a_current_table_has_a_lane_form() {
+        let rod = &rods(3)[0];
+        let mut s = Stretching::new(100.0).expect("stretching");
+        assert!(s.lane_term(rod).is_none(), "no table yet");
+        s.begin_step(rod, 1e-3).expect("table");
+        assert!(s.lane_term(rod).is_some());
+        s.formulation = crate::StretchFormulation::Pointwise;
+        assert!(s.lane_term(rod).is_none());
+        let bending = crate::Bending::new(1e-3).expect("bending");
+        assert!(bending.lane_term(rod).is_none());
+    }
+}

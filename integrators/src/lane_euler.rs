@@ -1,0 +1,620 @@
+//! Implicit Euler for [`LANES`] rods of one shape at once (batched ensembles, #17):
+//! the Newton iterations of [`crate::ImplicitEuler`] on the incremental potential
+//!
+//! \\[ \Phi(x) = \tfrac12 (x - v_0)^T M (x - v_0) + E(q_0 + h x) + \tfrac{h\alpha}{2}\, x^T M x, \\]
+//!
+//! residual \\(r = M((1 + h\alpha) x - v_0) + h \nabla E\\), Newton matrix
+//! \\(A = (1 + h\alpha) M + h^2 K\\), with the pins that hold single control points
+//! eliminated (see `point_pins.rs`: \\(A_{jk} \to 0\\), \\(A_{kk} \to I\\),
+//! \\(b_j \to b_j - A_{jk}\delta_k\\), \\(b_k \to \delta_k\\)), every lane in the same
+//! arithmetic loop ([`splinerod_core::lanes`]; the potential comes from a
+//! [`LanePotential`]) and the factorisation batched ([`BatchedBandedCholesky`]).
+//!
+//! Each lane makes the decisions of the scalar solver: it stops when its step moves no
+//! point by more than `tolerance · L` (or by the round-off band once its steps stall),
+//! and a converged lane stops moving while the others iterate. What the lockstep does
+//! not replicate fails the lane alone ([`LaneEuler::outcome`] says why): a matrix that
+//! is not positive definite (the scalar solver then switches to an indefinite or
+//! definite factorisation), a step the line search would shorten, a solve that does not
+//! converge, a non-finite value, per-point damping. The lanes never mix (every
+//! operation is lane by lane), so a lane's result and its failure do not depend on the
+//! other lanes. Shapes and settings outside the batched form (pins that are not single
+//! control points, rods of different knots or pins, a closed rod, the sparse solver, a
+//! step limit) fail the whole step with a [`LaneFallback`]. The caller steps the rods
+//! of failed lanes one by one, so a failure changes no result; each lane's result
+//! equals the scalar solver's up to round-off.
+
+use crate::batched::BatchedBandedCholesky;
+use crate::linear::LinearSolverKind;
+use crate::newton::{NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
+use crate::StepStats;
+use nalgebra::Vector3;
+use splinerod_core::lanes::{mul_add, LaneBlock, ZERO};
+use splinerod_core::{LaneBand, Lanes, Pin, Real, Rod, LANES};
+
+/// The potential energy of [`LANES`] rods of one shape, in lane form.
+pub trait LanePotential {
+    /// Adds to `energy` each lane's potential energy at positions `q` (coordinate `c` of
+    /// point `i` at `3i + c`) and, with `derivatives`, its gradient and exact Hessian
+    /// (upper band).
+    fn add(
+        &self,
+        q: &[Lanes],
+        energy: &mut Lanes,
+        derivatives: Option<(&mut [Lanes], &mut LaneBand)>,
+    );
+}
+
+/// Why a batched step was not taken: the rods must be stepped one by one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LaneFallback(pub &'static str);
+
+/// One lane's step, as [`crate::Integrator::step`] would have left it.
+#[derive(Debug, Clone, Copy)]
+pub struct LaneOutcome<'a> {
+    /// End-of-step control points.
+    pub positions: &'a [Vector3<Real>],
+    /// End-of-step velocities.
+    pub velocities: &'a [Vector3<Real>],
+    /// Newton's counters.
+    pub stats: StepStats,
+    /// The forces the pins exerted, N, one per pin.
+    pub pin_forces: &'a [Vector3<Real>],
+}
+
+/// Buffers of the batched implicit Euler step (no allocation once sized).
+#[derive(Debug, Default)]
+pub struct LaneEuler {
+    n: usize,
+    /// Block bandwidth of the Newton matrix.
+    bw: usize,
+    q0: Vec<Lanes>,
+    v0: Vec<Lanes>,
+    x: Vec<Lanes>,
+    q: Vec<Lanes>,
+    r: Vec<Lanes>,
+    gradient: Vec<Lanes>,
+    flat: Vec<Lanes>,
+    trial: Vec<Lanes>,
+    mass: Vec<Lanes>,
+    mass_bw: usize,
+    alpha: Lanes,
+    tolerance: Lanes,
+    limit: Lanes,
+    /// Control points the pins hold, and their targets for `x`.
+    pins: Vec<usize>,
+    targets: Vec<[Lanes; 3]>,
+    multipliers: Vec<[Lanes; 3]>,
+    /// Per pin at `k`: blocks `A_jk`, `j = k − bw ..= k + bw`, before elimination.
+    saved: Vec<LaneBlock>,
+    a: LaneBand,
+    factor: BatchedBandedCholesky,
+    stats: [StepStats; LANES],
+    /// Why each lane failed, if it did.
+    failed: [Option<&'static str>; LANES],
+    out_q: [Vec<Vector3<Real>>; LANES],
+    out_v: [Vec<Vector3<Real>>; LANES],
+    forces: [Vec<Vector3<Real>>; LANES],
+}
+
+impl LaneEuler {
+    /// One implicit Euler step of `dt` for each lane's rod (read, not changed) with its
+    /// pins, the potential `potential` whose Hessian has block bandwidth `bandwidth`;
+    /// the results are read with [`Self::outcome`].
+    pub fn step(
+        &mut self,
+        rods: [&Rod; LANES],
+        pins: [&[Pin]; LANES],
+        potential: &dyn LanePotential,
+        bandwidth: usize,
+        params: &NewtonParams,
+        dt: Real,
+    ) -> Result<(), LaneFallback> {
+        if params.linear_solver != LinearSolverKind::Banded || params.max_step.is_some() {
+            return Err(LaneFallback("solver settings"));
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(LaneFallback("time step"));
+        }
+        self.failed = [None; LANES];
+        self.gather(rods, bandwidth, params)?;
+        self.place_pins(rods, pins, dt)?;
+        self.newton(potential, bandwidth, params, dt);
+        self.scatter(dt);
+        Ok(())
+    }
+
+    /// Lane `l`'s result of the last successful [`Self::step`], or why the lane failed
+    /// (its rod must then be stepped alone).
+    pub fn outcome(&self, l: usize) -> Result<LaneOutcome<'_>, LaneFallback> {
+        if let Some(why) = self.failed[l] {
+            return Err(LaneFallback(why));
+        }
+        Ok(LaneOutcome {
+            positions: &self.out_q[l],
+            velocities: &self.out_v[l],
+            stats: self.stats[l],
+            pin_forces: &self.forces[l],
+        })
+    }
+
+    /// Marks lane `l` failed (the first reason stays).
+    fn fail(&mut self, l: usize, why: &'static str) {
+        self.failed[l].get_or_insert(why);
+    }
+
+    /// Whether lane `l` is still iterating.
+    fn live(&self, l: usize) -> bool {
+        self.failed[l].is_none() && !self.stats[l].converged
+    }
+
+    /// Reads the rods' states, mass matrices, damping and tolerances into lane form.
+    fn gather(
+        &mut self,
+        rods: [&Rod; LANES],
+        bandwidth: usize,
+        params: &NewtonParams,
+    ) -> Result<(), LaneFallback> {
+        let n = rods[0].len();
+        let mass_bw = rods[0].mass_matrix().bandwidth();
+        let knots = rods[0].basis().knots();
+        let shape = |rod: &&Rod| {
+            let same = |k: &[Real]| k.iter().zip(knots).all(|(a, b)| a.to_bits() == b.to_bits());
+            let k = rod.basis().knots();
+            rod.len() == n
+                && !rod.is_closed()
+                && rod.mass_matrix().bandwidth() == mass_bw
+                && k.len() == knots.len()
+                && same(k)
+        };
+        if !rods.iter().all(shape) || mass_bw > bandwidth {
+            return Err(LaneFallback("shape"));
+        }
+        (self.n, self.mass_bw) = (n, mass_bw);
+        for v in [
+            &mut self.q0,
+            &mut self.v0,
+            &mut self.x,
+            &mut self.q,
+            &mut self.r,
+            &mut self.gradient,
+            &mut self.flat,
+            &mut self.trial,
+        ] {
+            v.resize(3 * n, ZERO);
+        }
+        self.mass.resize(n * (mass_bw + 1), ZERO);
+        for (l, rod) in rods.iter().enumerate() {
+            let alpha = rod.uniform_damping().filter(|a| a.is_finite() && *a >= 0.0);
+            if alpha.is_none() {
+                self.fail(l, "damping");
+            }
+            self.alpha[l] = alpha.unwrap_or(0.0);
+            let length = rod.material().rest_length;
+            self.tolerance[l] = params.tolerance * length;
+            self.limit[l] = DIVERGENCE_LENGTHS * length;
+            for (i, (p, v)) in rod.positions.iter().zip(&rod.velocities).enumerate() {
+                for c in 0..3 {
+                    self.q0[3 * i + c][l] = p[c];
+                    self.v0[3 * i + c][l] = v[c];
+                }
+            }
+            for (m, &v) in self.mass.iter_mut().zip(rod.mass_matrix().band()) {
+                m[l] = v;
+            }
+        }
+        for l in 0..LANES {
+            let finite = |v: &[Lanes]| v.iter().all(|x| x[l].is_finite());
+            if !(finite(&self.q0) && finite(&self.v0)) {
+                self.fail(l, "non-finite state");
+            }
+        }
+        self.x.copy_from_slice(&self.v0);
+        Ok(())
+    }
+
+    /// The pins: each must hold one control point whole, the same in every lane; their
+    /// targets for the velocity unknown are \\((p - q_{0,k})/h\\).
+    fn place_pins(
+        &mut self,
+        rods: [&Rod; LANES],
+        pins: [&[Pin]; LANES],
+        dt: Real,
+    ) -> Result<(), LaneFallback> {
+        let count = pins[0].len();
+        if pins.iter().any(|p| p.len() != count) {
+            return Err(LaneFallback("pins"));
+        }
+        self.pins.clear();
+        self.targets.clear();
+        for p in 0..count {
+            // The rods share their knots: a pin at the same place holds the same point.
+            let lead = &pins[0][p];
+            let k = single_point(rods[0], lead).ok_or(LaneFallback("pins"))?;
+            if self.pins.contains(&k) {
+                return Err(LaneFallback("pins"));
+            }
+            let mut target = [ZERO; 3];
+            for (l, lane) in pins.iter().enumerate() {
+                let pin = &lane[p];
+                let alike = pin.at.to_bits() == lead.at.to_bits()
+                    && pin.slides_along.is_none()
+                    && !pin.tangent;
+                if !alike {
+                    return Err(LaneFallback("pins"));
+                }
+                if !pin.position.iter().all(|x| x.is_finite()) {
+                    self.fail(l, "non-finite pin");
+                }
+                for (c, t) in target.iter_mut().enumerate() {
+                    t[l] = (pin.position[c] - self.q0[3 * k + c][l]) / dt;
+                }
+            }
+            self.pins.push(k);
+            self.targets.push(target);
+        }
+        self.multipliers.resize(count, [ZERO; 3]);
+        Ok(())
+    }
+
+    /// Newton's iterations, lane by lane decisions (see the module docs).
+    fn newton(
+        &mut self,
+        potential: &dyn LanePotential,
+        bandwidth: usize,
+        params: &NewtonParams,
+        dt: Real,
+    ) {
+        self.stats = [StepStats {
+            batched: 1,
+            ..StepStats::default()
+        }; LANES];
+        let mut previous = [[Real::INFINITY; 2]; LANES];
+        for _ in 0..params.max_iterations {
+            if !(0..LANES).any(|l| self.live(l)) {
+                break;
+            }
+            let energy = self.assemble(potential, bandwidth, dt);
+            self.eliminate_pins();
+            let definite = self.factor.factor_band(&mut self.a);
+            for l in (0..LANES).filter(|&l| !definite[l]) {
+                self.fail(l, "not positive definite");
+            }
+            self.flat
+                .iter_mut()
+                .zip(&self.r)
+                .for_each(|(b, r)| *b = r.map(|x| -x));
+            self.apply_pin_targets();
+            if self.factor.solve_in_place(&mut self.flat).is_err() {
+                (0..LANES).for_each(|l| self.fail(l, "solve"));
+                return;
+            }
+            let (residual, slope) = self.pin_multipliers_and_slope();
+            let full = self.step_lengths(dt);
+            let mut search = [false; LANES];
+            let active: [bool; LANES] = std::array::from_fn(|l| self.live(l));
+            for l in (0..LANES).filter(|&l| active[l]) {
+                let stats = &mut self.stats[l];
+                stats.newton_iterations += 1;
+                stats.residual = residual[l];
+                if !(residual[l].is_finite() && full[l].is_finite()) {
+                    self.fail(l, "non-finite step");
+                } else if full[l] > self.limit[l] {
+                    self.fail(l, "diverged");
+                }
+                search[l] = params.line_search
+                    && full[l] > self.tolerance[l]
+                    && slope[l] < 0.0
+                    && self.feasible(l);
+            }
+            self.take_steps(potential, active, search, energy, slope, dt);
+            for l in 0..LANES {
+                if !self.live(l) {
+                    continue;
+                }
+                let (tol, [p0, p1]) = (self.tolerance[l], previous[l]);
+                let stalled =
+                    full[l] <= ROUND_OFF_BAND * tol && full[l] >= 0.5 * p0 && p0 >= 0.5 * p1;
+                previous[l] = [full[l], p0];
+                let reach = if stalled { ROUND_OFF_BAND * tol } else { tol };
+                if full[l] <= reach {
+                    self.stats[l].converged = true;
+                }
+            }
+        }
+        let accepted = params.accept_unconverged || params.max_iterations == 1;
+        for l in 0..LANES {
+            if !accepted && !self.stats[l].converged {
+                self.fail(l, "not converged");
+            }
+        }
+    }
+
+    /// Positions `q = q₀ + h x`, the potential's energy (returned), the residual `r` and
+    /// the Newton matrix `A` at them.
+    fn assemble(&mut self, potential: &dyn LanePotential, bandwidth: usize, dt: Real) -> Lanes {
+        for ((q, q0), x) in self.q.iter_mut().zip(&self.q0).zip(&self.x) {
+            *q = std::array::from_fn(|l| q0[l] + x[l] * dt);
+        }
+        self.bw = bandwidth;
+        self.a.reset(self.n, bandwidth);
+        self.gradient.fill(ZERO);
+        let mut energy = ZERO;
+        potential.add(
+            &self.q,
+            &mut energy,
+            Some((&mut self.gradient, &mut self.a)),
+        );
+        let scale: Lanes = std::array::from_fn(|l| 1.0 + dt * self.alpha[l]);
+        for ((t, x), v0) in self.trial.iter_mut().zip(&self.x).zip(&self.v0) {
+            *t = std::array::from_fn(|l| x[l] * scale[l] - v0[l]);
+        }
+        mass_times(&self.mass, self.mass_bw, &self.trial, &mut self.r);
+        for (r, g) in self.r.iter_mut().zip(&self.gradient) {
+            for l in 0..LANES {
+                r[l] += g[l] * dt;
+            }
+        }
+        let h2 = dt * dt;
+        for block in self.a.blocks_mut() {
+            block.iter_mut().flatten().for_each(|e| *e *= h2);
+        }
+        let w = self.mass_bw + 1;
+        for i in 0..self.n {
+            let row = self.a.row_mut(i);
+            for (k, m) in self.mass[i * w..(i + 1) * w]
+                .iter()
+                .enumerate()
+                .take(row.len())
+            {
+                for e in [0, 4, 8] {
+                    mul_add(&mut row[k][e], scale, *m);
+                }
+            }
+        }
+        energy
+    }
+
+    /// Saves the pinned columns of `A` and decouples them (identity on the diagonal).
+    fn eliminate_pins(&mut self) {
+        let (n, bw) = (self.n, self.bw);
+        let width = 2 * bw + 1;
+        self.saved.resize(self.pins.len() * width, [ZERO; 9]);
+        for (e, &k) in self.pins.iter().enumerate() {
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                self.saved[e * width + j + bw - k] = self.a.block(j, k);
+            }
+        }
+        let mut identity = [ZERO; 9];
+        for e in [0, 4, 8] {
+            identity[e] = [1.0; LANES];
+        }
+        for &k in &self.pins {
+            for j in k.saturating_sub(bw)..k {
+                self.a.row_mut(j)[k - j] = [ZERO; 9];
+            }
+            let row = self.a.row_mut(k);
+            row.iter_mut().for_each(|b| *b = [ZERO; 9]);
+            row[0] = identity;
+        }
+    }
+
+    /// The right-hand side `b = −r` rewritten for the prescribed steps
+    /// \\(\delta_k = c - x_k\\) of the pinned points.
+    fn apply_pin_targets(&mut self) {
+        let (n, bw) = (self.n, self.bw);
+        let width = 2 * bw + 1;
+        for (e, &k) in self.pins.iter().enumerate() {
+            let delta = self.delta(e, k);
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                let block = &self.saved[e * width + j + bw - k];
+                for r in 0..3 {
+                    for c in 0..3 {
+                        for l in 0..LANES {
+                            self.flat[3 * j + r][l] -= block[3 * c + r][l] * delta[c][l];
+                        }
+                    }
+                }
+            }
+        }
+        for (e, &k) in self.pins.iter().enumerate() {
+            let delta = self.delta(e, k);
+            self.flat[3 * k..3 * k + 3].copy_from_slice(&delta);
+        }
+    }
+
+    /// \\(\delta_k = c - x_k\\) of pin `e` at control point `k`.
+    fn delta(&self, e: usize, k: usize) -> [Lanes; 3] {
+        std::array::from_fn(|c| {
+            std::array::from_fn(|l| self.targets[e][c][l] - self.x[3 * k + c][l])
+        })
+    }
+
+    /// Whether lane `l`'s iterate meets its pins (the line search runs only then).
+    fn feasible(&self, l: usize) -> bool {
+        self.pins.iter().enumerate().all(|(e, &k)| {
+            let t = &self.targets[e];
+            let gap = (0..3).map(|c| (t[c][l] - self.x[3 * k + c][l]).abs());
+            let size = (0..3).map(|c| t[c][l].abs()).fold(0.0, Real::max);
+            gap.fold(0.0, Real::max) <= 1e-10 * (1.0 + size)
+        })
+    }
+
+    /// The pins' multipliers \\(\mu_k = r_k + (A\Delta x)_k\\) from the saved columns;
+    /// per lane the norm of \\(r - G^T\mu\\) and the slope \\((r - G^T\mu)\cdot\Delta x\\).
+    fn pin_multipliers_and_slope(&mut self) -> (Lanes, Lanes) {
+        let (n, bw) = (self.n, self.bw);
+        let width = 2 * bw + 1;
+        for (e, &k) in self.pins.iter().enumerate() {
+            let mut mu: [Lanes; 3] = std::array::from_fn(|c| self.r[3 * k + c]);
+            for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
+                let block = &self.saved[e * width + j + bw - k];
+                for (c, m) in mu.iter_mut().enumerate() {
+                    for r in 0..3 {
+                        mul_add(m, block[3 * c + r], self.flat[3 * j + r]);
+                    }
+                }
+            }
+            self.multipliers[e] = mu;
+        }
+        // r − Gᵀμ into the gradient buffer (free until the next assembly).
+        self.gradient.copy_from_slice(&self.r);
+        for (e, &k) in self.pins.iter().enumerate() {
+            for c in 0..3 {
+                for l in 0..LANES {
+                    self.gradient[3 * k + c][l] -= self.multipliers[e][c][l];
+                }
+            }
+        }
+        let (mut norm, mut slope) = (ZERO, ZERO);
+        for (g, d) in self.gradient.iter().zip(&self.flat) {
+            mul_add(&mut norm, *g, *g);
+            mul_add(&mut slope, *g, *d);
+        }
+        (norm.map(Real::sqrt), slope)
+    }
+
+    /// Per lane the largest move of a control point in the step, m.
+    fn step_lengths(&self, dt: Real) -> Lanes {
+        let mut full = ZERO;
+        for d in &self.flat {
+            for l in 0..LANES {
+                // NaN propagates: max would drop it.
+                full[l] = if d[l].abs() > full[l] || d[l].is_nan() {
+                    d[l].abs()
+                } else {
+                    full[l]
+                };
+            }
+        }
+        full.map(|f| f * dt)
+    }
+
+    /// Takes the full step in the active lanes; where a lane searches, its merit must
+    /// decrease by Armijo's rule (or within rounding), else the scalar solver would
+    /// shorten the step: the lane fails.
+    fn take_steps(
+        &mut self,
+        potential: &dyn LanePotential,
+        active: [bool; LANES],
+        search: [bool; LANES],
+        energy: Lanes,
+        slope: Lanes,
+        dt: Real,
+    ) {
+        let phi0 = search.contains(&true).then(|| self.merit(energy, dt));
+        for ((t, x), d) in self.trial.iter_mut().zip(&self.x).zip(&self.flat) {
+            *t = std::array::from_fn(|l| if active[l] { x[l] + d[l] } else { x[l] });
+        }
+        std::mem::swap(&mut self.x, &mut self.trial);
+        let Some(phi0) = phi0 else {
+            return;
+        };
+        for ((q, q0), x) in self.q.iter_mut().zip(&self.q0).zip(&self.x) {
+            *q = std::array::from_fn(|l| q0[l] + x[l] * dt);
+        }
+        let mut trial_energy = ZERO;
+        potential.add(&self.q, &mut trial_energy, None);
+        let phi = self.merit(trial_energy, dt);
+        for l in (0..LANES).filter(|&l| search[l]) {
+            let armijo = phi[l] <= phi0[l] + 1e-4 * slope[l];
+            let noise = (phi[l] - phi0[l]).abs() <= 1e-14 * phi0[l].abs();
+            if !phi[l].is_finite() || !(armijo || noise) {
+                self.fail(l, "line search");
+            }
+        }
+    }
+
+    /// The merit \\(\Phi\\) at the current `x` with the potential's `energy` there.
+    fn merit(&mut self, energy: Lanes, dt: Real) -> Lanes {
+        for ((t, x), v0) in self.trial.iter_mut().zip(&self.x).zip(&self.v0) {
+            *t = std::array::from_fn(|l| x[l] - v0[l]);
+        }
+        let inertia = mass_bilinear(&self.mass, self.mass_bw, &self.trial, &self.trial);
+        let motion = mass_bilinear(&self.mass, self.mass_bw, &self.x, &self.x);
+        std::array::from_fn(|l| 0.5 * inertia[l] + energy[l] + 0.5 * dt * self.alpha[l] * motion[l])
+    }
+
+    /// Writes each lane's end state and pin forces (checked finite).
+    fn scatter(&mut self, dt: Real) {
+        let n = self.n;
+        for l in 0..LANES {
+            if self.failed[l].is_some() {
+                continue;
+            }
+            let (q, v) = (&mut self.out_q[l], &mut self.out_v[l]);
+            q.resize(n, Vector3::zeros());
+            v.resize(n, Vector3::zeros());
+            for i in 0..n {
+                for c in 0..3 {
+                    let x = self.x[3 * i + c][l];
+                    v[i][c] = x;
+                    q[i][c] = self.q0[3 * i + c][l] + x * dt;
+                }
+            }
+            let finite = |f: &[Vector3<Real>]| f.iter().all(|p| p.iter().all(|x| x.is_finite()));
+            if !(finite(q) && finite(v)) {
+                self.failed[l] = Some("non-finite state");
+                continue;
+            }
+            let forces = &mut self.forces[l];
+            forces.clear();
+            let mu = self.multipliers.iter();
+            forces.extend(mu.map(|m| Vector3::new(m[0][l], m[1][l], m[2][l]) / dt));
+        }
+    }
+}
+
+/// The control point a pin holds alone and whole (no sliding, not a tangent pin, its
+/// row one 1 and zeros), if it does.
+fn single_point(rod: &Rod, pin: &Pin) -> Option<usize> {
+    if pin.slides_along.is_some() || pin.tangent {
+        return None;
+    }
+    let row = pin.row(rod).ok()?;
+    let mut nonzero = (0..row.order).filter(|&k| row.value[k] != 0.0);
+    match (nonzero.next(), nonzero.next()) {
+        (Some(k), None) if (row.value[k] - 1.0).abs() <= 1e-14 => Some(row.first + k),
+        _ => None,
+    }
+}
+
+/// `y = M x` for the lane mass matrices (upper band `m`, bandwidth `bw`) on a field.
+fn mass_times(m: &[Lanes], bw: usize, x: &[Lanes], y: &mut [Lanes]) {
+    let (n, w) = (x.len() / 3, bw + 1);
+    y.fill(ZERO);
+    for i in 0..n {
+        let row = &m[i * w..(i + 1) * w];
+        for c in 0..3 {
+            mul_add(&mut y[3 * i + c], x[3 * i + c], row[0]);
+        }
+        for k in 1..w.min(n - i) {
+            for c in 0..3 {
+                mul_add(&mut y[3 * i + c], x[3 * (i + k) + c], row[k]);
+                mul_add(&mut y[3 * (i + k) + c], x[3 * i + c], row[k]);
+            }
+        }
+    }
+}
+
+/// \\(\sum_{ij} M_{ij}\, x_i \cdot y_j\\) per lane.
+fn mass_bilinear(m: &[Lanes], bw: usize, x: &[Lanes], y: &[Lanes]) -> Lanes {
+    let (n, w) = (x.len() / 3, bw + 1);
+    let mut sum = ZERO;
+    let dot = |i: usize, j: usize| -> Lanes {
+        let mut d = ZERO;
+        for c in 0..3 {
+            mul_add(&mut d, x[3 * i + c], y[3 * j + c]);
+        }
+        d
+    };
+    for i in 0..n {
+        let row = &m[i * w..(i + 1) * w];
+        mul_add(&mut sum, row[0], dot(i, i));
+        for k in 1..w.min(n - i) {
+            let both = splinerod_core::lanes::add(dot(i, i + k), dot(i + k, i));
+            mul_add(&mut sum, row[k], both);
+        }
+    }
+    sum
+}
