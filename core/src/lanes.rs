@@ -101,6 +101,30 @@ impl LaneBand {
     }
 }
 
+/// Where a lane evaluation adds its derivatives: the gradient field and the Hessian's
+/// upper band, the Hessian multiplied by `hessian_scale` (an implicit step's `h²`, so
+/// that the band needs no separate pass).
+#[derive(Debug)]
+pub struct Derivatives<'a> {
+    /// Gradient, coordinate `c` of point `i` at `3i + c`.
+    pub gradient: &'a mut [Lanes],
+    /// Hessian (upper band), times `hessian_scale`.
+    pub hessian: &'a mut LaneBand,
+    /// Factor of the Hessian.
+    pub hessian_scale: Real,
+}
+
+impl Derivatives<'_> {
+    /// A shorter-lived borrow of the same buffers.
+    pub fn reborrow(&mut self) -> Derivatives<'_> {
+        Derivatives {
+            gradient: self.gradient,
+            hessian: self.hessian,
+            hessian_scale: self.hessian_scale,
+        }
+    }
+}
+
 /// `a + b`, lane by lane.
 #[inline(always)]
 pub fn add(a: Lanes, b: Lanes) -> Lanes {
@@ -125,6 +149,28 @@ pub fn mul_add(acc: &mut Lanes, a: Lanes, b: Lanes) {
     for l in 0..LANES {
         acc[l] += a[l] * b[l];
     }
+}
+
+/// `acc += a · b`, lane by lane, fused (one rounding) when `FUSED`: for kernels compiled
+/// twice, for processors with fused multiply-add (where `f64::mul_add` is one
+/// instruction) and without (where it would be a library call).
+#[inline(always)]
+pub fn fma<const FUSED: bool>(acc: &mut Lanes, a: Lanes, b: Lanes) {
+    for l in 0..LANES {
+        acc[l] = if FUSED {
+            a[l].mul_add(b[l], acc[l])
+        } else {
+            acc[l] + a[l] * b[l]
+        };
+    }
+}
+
+/// Whether this processor runs the wide kernels: AVX2 (four lanes per instruction)
+/// with fused multiply-add. Detected once.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub fn wide() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 #[cfg(test)]

@@ -64,7 +64,7 @@ pub use check::Requirement;
 pub use error::CoreError;
 pub use keyframes::{Interpolation, Keyframes};
 pub use knot_map::{Coefficient, KnotMap, KnotOperation};
-pub use lanes::{LaneBand, LaneBlock, Lanes, LANES};
+pub use lanes::{Derivatives, LaneBand, LaneBlock, Lanes, LANES};
 pub use periodic::PeriodicBSplineSpace;
 pub use pins::Pin;
 pub use proximity::{closest_points, Closest, SpanBoxes};

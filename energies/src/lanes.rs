@@ -22,7 +22,7 @@
 
 use crate::stretching::MomentTerm;
 use nalgebra::Vector3;
-use splinerod_core::{LaneBand, Lanes, Real, LANES};
+use splinerod_core::{Derivatives, Lanes, Real, LANES};
 
 /// An energy in a form the batched step evaluates for several rods at once.
 #[derive(Debug, Clone, Copy)]
@@ -66,10 +66,10 @@ pub fn add_lanes(
     terms: &[LaneTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
-    derivatives: Option<(&mut LaneField, &mut LaneBand)>,
+    derivatives: Option<Derivatives<'_>>,
 ) {
     match &terms[0] {
-        LaneTerm::Gravity { .. } => add_gravity(terms, q, energy, derivatives.map(|d| d.0)),
+        LaneTerm::Gravity { .. } => add_gravity(terms, q, energy, derivatives.map(|d| d.gradient)),
         LaneTerm::Moments(_) => {
             let moments: [&MomentTerm<'_>; LANES] = std::array::from_fn(|l| match &terms[l] {
                 LaneTerm::Moments(m) => m,
@@ -153,7 +153,12 @@ mod tests {
         let (mut energy, mut gradient, mut band) =
             ([0.0; LANES], vec![[0.0; LANES]; 3 * n], LaneBand::default());
         band.reset(n, bw);
-        add_lanes(&terms, &q, &mut energy, Some((&mut gradient, &mut band)));
+        let derivatives = Derivatives {
+            gradient: &mut gradient,
+            hessian: &mut band,
+            hessian_scale: 1.0,
+        };
+        add_lanes(&terms, &q, &mut energy, Some(derivatives));
         for (l, (rod, e)) in rods.iter().zip(energies).enumerate() {
             let close = |a: Real, b: Real, scale: Real| (a - b).abs() <= 1e-12 * scale;
             assert!(

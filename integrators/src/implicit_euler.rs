@@ -76,8 +76,7 @@ impl Integrator for ImplicitEuler {
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
         // A preloaded step is used once, and only for the step it was taken as.
         if std::mem::take(&mut self.preloaded.live) && self.preloaded.fits(system, dt) {
-            let result = self.stepper.accept(system, &self.preloaded.outcome(), dt);
-            return self.stepper.finish(system, result);
+            return self.stepper.accept(system, &self.preloaded.outcome(), dt);
         }
         self.stepper.begin(system, dt)?;
         let step = Increment {

@@ -311,16 +311,16 @@ impl Stepper {
         }
     }
 
-    /// Takes a step solved elsewhere (the batched form, [`crate::lane_euler`]) as this
-    /// scheme's own: checks and saves the start as [`Self::begin`] does, writes the end
-    /// state and keeps the pin forces; `finish` then checks it like a solved step.
+    /// Takes a step solved elsewhere (the batched form, [`crate::lane_euler`], which
+    /// checked the start state, the damping and the end state finite) as this scheme's
+    /// own: writes the end state and keeps the pin forces.
     pub fn accept(
         &mut self,
         system: &mut dyn System,
         outcome: &crate::lane_euler::LaneOutcome<'_>,
         dt: Real,
     ) -> Result<StepStats, IntegratorError> {
-        self.begin(system, dt)?;
+        positive("dt", dt)?;
         let rod = system.rod_mut();
         rod.positions.copy_from_slice(outcome.positions);
         rod.velocities.copy_from_slice(outcome.velocities);

@@ -30,26 +30,22 @@ use crate::newton::{NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
 use crate::StepStats;
 use nalgebra::Vector3;
 use splinerod_core::lanes::{mul_add, LaneBlock, ZERO};
-use splinerod_core::{LaneBand, Lanes, Pin, Real, Rod, LANES};
+use splinerod_core::{Derivatives, LaneBand, Lanes, Pin, Real, Rod, LANES};
 
 /// The potential energy of [`LANES`] rods of one shape, in lane form.
 pub trait LanePotential {
     /// Adds to `energy` each lane's potential energy at positions `q` (coordinate `c` of
-    /// point `i` at `3i + c`) and, with `derivatives`, its gradient and exact Hessian
-    /// (upper band).
-    fn add(
-        &self,
-        q: &[Lanes],
-        energy: &mut Lanes,
-        derivatives: Option<(&mut [Lanes], &mut LaneBand)>,
-    );
+    /// point `i` at `3i + c`) and, with `derivatives`, its gradient and its exact Hessian
+    /// (upper band) times the scale given there.
+    fn add(&self, q: &[Lanes], energy: &mut Lanes, derivatives: Option<Derivatives<'_>>);
 }
 
 /// Why a batched step was not taken: the rods must be stepped one by one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LaneFallback(pub &'static str);
 
-/// One lane's step, as [`crate::Integrator::step`] would have left it.
+/// One lane's step, as [`crate::Integrator::step`] would have left it (its start
+/// state, damping and end state checked finite).
 #[derive(Debug, Clone, Copy)]
 pub struct LaneOutcome<'a> {
     /// End-of-step control points.
@@ -331,7 +327,7 @@ impl LaneEuler {
     }
 
     /// Positions `q = q₀ + h x`, the potential's energy (returned), the residual `r` and
-    /// the Newton matrix `A` at them.
+    /// the Newton matrix `A = h² K + (1 + hα) M` at them.
     fn assemble(&mut self, potential: &dyn LanePotential, bandwidth: usize, dt: Real) -> Lanes {
         for ((q, q0), x) in self.q.iter_mut().zip(&self.q0).zip(&self.x) {
             *q = std::array::from_fn(|l| q0[l] + x[l] * dt);
@@ -340,11 +336,12 @@ impl LaneEuler {
         self.a.reset(self.n, bandwidth);
         self.gradient.fill(ZERO);
         let mut energy = ZERO;
-        potential.add(
-            &self.q,
-            &mut energy,
-            Some((&mut self.gradient, &mut self.a)),
-        );
+        let derivatives = Derivatives {
+            gradient: &mut self.gradient,
+            hessian: &mut self.a,
+            hessian_scale: dt * dt,
+        };
+        potential.add(&self.q, &mut energy, Some(derivatives));
         let scale: Lanes = std::array::from_fn(|l| 1.0 + dt * self.alpha[l]);
         for ((t, x), v0) in self.trial.iter_mut().zip(&self.x).zip(&self.v0) {
             *t = std::array::from_fn(|l| x[l] * scale[l] - v0[l]);
@@ -354,10 +351,6 @@ impl LaneEuler {
             for l in 0..LANES {
                 r[l] += g[l] * dt;
             }
-        }
-        let h2 = dt * dt;
-        for block in self.a.blocks_mut() {
-            block.iter_mut().flatten().for_each(|e| *e *= h2);
         }
         let w = self.mass_bw + 1;
         for i in 0..self.n {

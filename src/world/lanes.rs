@@ -24,7 +24,7 @@
 //! dropped whole and its members are stepped alone too.
 
 use crate::Simulation;
-use splinerod_core::{LaneBand, Lanes, Real, LANES};
+use splinerod_core::{Derivatives, Lanes, Real, LANES};
 use splinerod_energies::lanes::add_lanes;
 use splinerod_energies::LaneTerm;
 use splinerod_integrators::lane_euler::{LaneEuler, LanePotential};
@@ -45,15 +45,14 @@ struct Terms<'a> {
 }
 
 impl LanePotential for Terms<'_> {
-    fn add(
-        &self,
-        q: &[Lanes],
-        energy: &mut Lanes,
-        mut derivatives: Option<(&mut [Lanes], &mut LaneBand)>,
-    ) {
+    fn add(&self, q: &[Lanes], energy: &mut Lanes, mut derivatives: Option<Derivatives<'_>>) {
         for terms in self.terms.iter().flatten() {
-            let d = derivatives.as_mut().map(|(g, h)| (&mut **g, &mut **h));
-            add_lanes(terms, q, energy, d);
+            add_lanes(
+                terms,
+                q,
+                energy,
+                derivatives.as_mut().map(Derivatives::reborrow),
+            );
         }
     }
 }

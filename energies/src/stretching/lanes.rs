@@ -6,8 +6,8 @@
 use super::table::TensionTable;
 use super::Stretching;
 use crate::lanes::{LaneField, LaneTerm};
-use splinerod_core::lanes::{mul_add, sub, ZERO};
-use splinerod_core::{LaneBand, Lanes, Real, Rod, LANES};
+use splinerod_core::lanes::{fma, sub, ZERO};
+use splinerod_core::{Derivatives, LaneBand, Lanes, Real, Rod, LANES};
 
 /// Widest function block a lane evaluation takes: `2d` for degree 5.
 const MAX_LANE_WIDTH: usize = 10;
@@ -63,35 +63,36 @@ pub(crate) fn add_moment_lanes(
     terms: [&MomentTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
-    derivatives: Option<(&mut LaneField, &mut LaneBand)>,
+    derivatives: Option<Derivatives<'_>>,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2 (checked on the line above).
-        return unsafe { moments_avx2(terms, q, energy, derivatives) };
+    if splinerod_core::lanes::wide() {
+        // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+        return unsafe { moments_wide(terms, q, energy, derivatives) };
     }
-    moments(terms, q, energy, derivatives);
+    moments::<false>(terms, q, energy, derivatives);
 }
 
-/// [`moments`] compiled for AVX2 (four lanes per instruction instead of two).
+/// [`moments`] compiled for AVX2 with fused multiply-add (four lanes per instruction
+/// instead of two, one instruction per multiply-add).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn moments_avx2(
+#[target_feature(enable = "avx2,fma")]
+unsafe fn moments_wide(
     terms: [&MomentTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
-    derivatives: Option<(&mut LaneField, &mut LaneBand)>,
+    derivatives: Option<Derivatives<'_>>,
 ) {
-    moments(terms, q, energy, derivatives);
+    moments::<true>(terms, q, energy, derivatives);
 }
 
 /// Energy, gradient and Hessian of the moment terms, function by function.
 #[inline(always)]
-fn moments(
+fn moments<const FUSED: bool>(
     terms: [&MomentTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
-    mut derivatives: Option<(&mut LaneField, &mut LaneBand)>,
+    mut derivatives: Option<Derivatives<'_>>,
 ) {
     let rows = terms[0].table.rows();
     let mut g = [ZERO; MAX_PACKED];
@@ -108,11 +109,11 @@ fn moments(
             }
         }
         let g = &g[..packed.len()];
-        moment_derivatives(q, first, width, g, rows, &mut r, &mut db);
+        moment_derivatives::<FUSED>(q, first, width, g, rows, &mut r, &mut db);
         let mut quad = ZERO;
         for (ra, da) in r[..width].iter().zip(&db[..width]) {
             for c in 0..3 {
-                mul_add(&mut quad, ra[c], da[c]);
+                fma::<FUSED>(&mut quad, ra[c], da[c]);
             }
         }
         let (mut c, mut tension) = (ZERO, ZERO);
@@ -127,20 +128,22 @@ fn moments(
             tension[l] = hat + c[l] * b;
             energy[l] += 0.5 * (tension[l] + hat) * b;
         }
-        if let Some((gradient, hessian)) = derivatives.as_mut() {
+        if let Some(d) = derivatives.as_mut() {
             for (a, da) in db[..width].iter().enumerate() {
                 for coord in 0..3 {
-                    mul_add(&mut gradient[3 * (first + a) + coord], da[coord], tension);
+                    fma::<FUSED>(&mut d.gradient[3 * (first + a) + coord], da[coord], tension);
                 }
             }
-            add_function_blocks(hessian, first, &db[..width], g, rows, c, tension);
+            let h = d.hessian_scale;
+            let (c, lambda) = (c.map(|c| c * h), tension.map(|t| t * h));
+            add_function_blocks::<FUSED>(d.hessian, first, &db[..width], g, rows, c, lambda);
         }
     }
 }
 
 /// `r = q − q_first` and `db = G r` over the function's `width` points, lane by lane.
 #[inline(always)]
-fn moment_derivatives(
+fn moment_derivatives<const FUSED: bool>(
     q: &LaneField,
     first: usize,
     width: usize,
@@ -161,8 +164,8 @@ fn moment_derivatives(
         for b in a + 1..width {
             let gab = row[b - a];
             for c in 0..3 {
-                mul_add(&mut sum[c], r[b][c], gab);
-                mul_add(&mut db[b][c], r[a][c], gab);
+                fma::<FUSED>(&mut sum[c], r[b][c], gab);
+                fma::<FUSED>(&mut db[b][c], r[a][c], gab);
             }
         }
         for c in 0..3 {
@@ -174,7 +177,7 @@ fn moment_derivatives(
 /// Adds \\(c\, \partial b_a \partial b_b^T + \lambda (G_k)_{ab} I\\) at blocks
 /// `(first + a, first + b)`, `a ≤ b`, lane by lane.
 #[inline(always)]
-fn add_function_blocks(
+fn add_function_blocks<const FUSED: bool>(
     hessian: &mut LaneBand,
     first: usize,
     db: &[[Lanes; 3]],
@@ -189,7 +192,7 @@ fn add_function_blocks(
         for ((block, vb), gab) in row.iter_mut().zip(&db[a..]).zip(&g[rows[a]..]) {
             for (col, vc) in vb.iter().enumerate() {
                 for (r, ur) in u.iter().enumerate() {
-                    mul_add(&mut block[3 * col + r], *ur, *vc);
+                    fma::<FUSED>(&mut block[3 * col + r], *ur, *vc);
                 }
             }
             let d = splinerod_core::lanes::mul(lambda, *gab);
@@ -197,5 +200,62 @@ fn add_function_blocks(
                 block[e] = splinerod_core::lanes::add(block[e], d);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Energy;
+    use nalgebra::Vector3;
+    use splinerod_core::{BSplineSpace, Material};
+
+    #[test]
+    fn the_plain_and_the_fused_kernels_agree_to_round_off() {
+        let material = Material {
+            rest_length: 1.0,
+            linear_density: 0.1,
+        };
+        let basis = BSplineSpace::clamped_uniform(3, 9, 1.0).expect("basis");
+        let end = Vector3::new(1.2, 0.1, 0.0);
+        let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod");
+        let mut s = Stretching::new(80.0).expect("stretching");
+        s.begin_step(&rod, 1e-3).expect("table");
+        let Some(LaneTerm::Moments(term)) = s.lane_term(&rod) else {
+            panic!("lane form");
+        };
+        let n = rod.len();
+        let q: Vec<Lanes> = (0..3 * n)
+            .map(|k| {
+                std::array::from_fn(|l| rod.positions[k / 3][k % 3] * (1.0 + 0.01 * l as Real))
+            })
+            .collect();
+        let run = |fused: bool| {
+            let (mut e, mut g, mut h) =
+                ([0.0; LANES], vec![[0.0; LANES]; 3 * n], LaneBand::default());
+            h.reset(n, 5);
+            let d = Derivatives {
+                gradient: &mut g,
+                hessian: &mut h,
+                hessian_scale: 1.0,
+            };
+            let terms = [&term; LANES];
+            match fused {
+                true => moments::<true>(terms, &q, &mut e, Some(d)),
+                false => moments::<false>(terms, &q, &mut e, Some(d)),
+            }
+            (e, g, h)
+        };
+        let (a, b) = (run(false), run(true));
+        let close = |x: Real, y: Real| (x - y).abs() <= 1e-12 * (1.0 + x.abs());
+        assert!(a.0.iter().zip(&b.0).all(|(x, y)| close(*x, *y)));
+        assert!(a
+            .1
+            .iter()
+            .flatten()
+            .zip(b.1.iter().flatten())
+            .all(|(x, y)| close(*x, *y)));
+        let (ha, hb) = (a.2.blocks().iter().flatten(), b.2.blocks().iter().flatten());
+        assert!(ha.flatten().zip(hb.flatten()).all(|(x, y)| close(*x, *y)));
     }
 }
