@@ -79,6 +79,10 @@ pub struct LaneEuler {
     limit: Lanes,
     /// Control points the pins hold, and their targets for `x`.
     pins: Vec<usize>,
+    /// The knots `pin_points` were found on, and per pin (place, tangent, sliding) the
+    /// control point it holds alone, if any.
+    pin_knots: Vec<Real>,
+    pin_points: Vec<((u64, bool, bool), Option<usize>)>,
     targets: Vec<[Lanes; 3]>,
     multipliers: Vec<[Lanes; 3]>,
     /// Per pin at `k`: blocks `A_jk`, `j = k − bw ..= k + bw`, before elimination.
@@ -226,7 +230,7 @@ impl LaneEuler {
         for p in 0..count {
             // The rods share their knots: a pin at the same place holds the same point.
             let lead = &pins[0][p];
-            let k = single_point(rods[0], lead).ok_or(LaneFallback("pins"))?;
+            let k = self.pin_point(rods[0], lead).ok_or(LaneFallback("pins"))?;
             if self.pins.contains(&k) {
                 return Err(LaneFallback("pins"));
             }
@@ -251,6 +255,30 @@ impl LaneEuler {
         }
         self.multipliers.resize(count, [ZERO; 3]);
         Ok(())
+    }
+
+    /// The control point `pin` holds alone and whole on `rod` ([`single_point`]),
+    /// remembered for the knots it was found on (an ensemble's groups share them).
+    fn pin_point(&mut self, rod: &Rod, pin: &Pin) -> Option<usize> {
+        let knots = rod.basis().knots();
+        let same = self.pin_knots.len() == knots.len()
+            && self
+                .pin_knots
+                .iter()
+                .zip(knots)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same {
+            self.pin_knots.clear();
+            self.pin_knots.extend_from_slice(knots);
+            self.pin_points.clear();
+        }
+        let key = (pin.at.to_bits(), pin.tangent, pin.slides_along.is_some());
+        if let Some(&(_, k)) = self.pin_points.iter().find(|(p, _)| *p == key) {
+            return k;
+        }
+        let k = single_point(rod, pin);
+        self.pin_points.push((key, k));
+        k
     }
 
     /// Newton's iterations, lane by lane decisions (see the module docs).
@@ -402,11 +430,14 @@ impl LaneEuler {
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 let block = &self.saved[e * width + j + bw - k];
                 for r in 0..3 {
-                    for c in 0..3 {
+                    let mut acc = self.flat[3 * j + r];
+                    for (c, d) in delta.iter().enumerate() {
+                        let b = &block[3 * c + r];
                         for l in 0..LANES {
-                            self.flat[3 * j + r][l] -= block[3 * c + r][l] * delta[c][l];
+                            acc[l] -= b[l] * d[l];
                         }
                     }
+                    self.flat[3 * j + r] = acc;
                 }
             }
         }
@@ -556,6 +587,16 @@ impl LaneEuler {
             forces.extend(mu.map(|m| Vector3::new(m[0][l], m[1][l], m[2][l]) / dt));
         }
     }
+}
+
+/// A 64-bit fingerprint of a state (every bit of every coordinate, FNV-1a style):
+/// what a preloaded step ([`crate::Integrator::preload`]) recognises its start by
+/// without keeping a copy of it.
+pub fn fingerprint(positions: &[Vector3<Real>], velocities: &[Vector3<Real>]) -> u64 {
+    let words = positions.iter().chain(velocities).flat_map(|v| v.iter());
+    words.fold(0xcbf2_9ce4_8422_2325, |h, x| {
+        (h ^ x.to_bits()).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 /// The control point a pin holds alone and whole (no sliding, not a tangent pin, its

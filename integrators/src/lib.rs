@@ -207,8 +207,8 @@ pub trait Integrator: Send + Sync {
     }
     /// Hands the scheme the step of `dt` the batched form took from the state
     /// `start` (positions, velocities): the next [`step`](Integrator::step) of the same
-    /// `dt` from exactly that state takes it (with its checks and counters) instead of
-    /// solving; any other step ignores it. Default: ignored.
+    /// `dt` from that state (recognised by its [`lane_euler::fingerprint`]) takes it
+    /// instead of solving; any other step ignores it. Default: ignored.
     fn preload(
         &mut self,
         start: (&[Vector3<Real>], &[Vector3<Real>]),

@@ -100,15 +100,15 @@ fn moments<const FUSED: bool>(
     let mut db = [[ZERO; 3]; MAX_LANE_WIDTH];
     for slot in 0..terms[0].table.functions() {
         let (first, width, _, packed) = terms[0].table.function(slot);
-        let mut m = ZERO;
-        for (l, term) in terms.iter().enumerate() {
-            let (_, _, ml, gl) = term.table.function(slot);
-            m[l] = ml;
-            for (e, &v) in g.iter_mut().zip(gl) {
-                e[l] = v;
-            }
+        // Each lane's G_k entry by entry: one vector per entry.
+        let len = packed.len();
+        let tables = terms.map(|t| t.table.function(slot));
+        let m: Lanes = std::array::from_fn(|l| tables[l].2);
+        let gl = tables.map(|t| &t.3[..len]);
+        for (e, slot) in g[..len].iter_mut().enumerate() {
+            *slot = std::array::from_fn(|l| gl[l][e]);
         }
-        let g = &g[..packed.len()];
+        let g = &g[..len];
         moment_derivatives::<FUSED>(q, first, width, g, rows, &mut r, &mut db);
         let mut quad = ZERO;
         for (ra, da) in r[..width].iter().zip(&db[..width]) {
