@@ -16,7 +16,8 @@
 //! shape of the first of them (the same knots and pins); a lane left over repeats the
 //! first member and its result is dropped. A member can be batched when its integrator
 //! has a batched form ([`Integrator::lane_params`], implicit Euler), its step is taken
-//! whole (no shorter sub-step pending), it has no driven pins and no time-dependent
+//! whole (no shorter sub-step pending), it does not adapt its knots (whose decisions a
+//! round-off difference could flip), it has no driven pins and no time-dependent
 //! energy, and every energy acting on it has a lane form
 //! ([`splinerod_energies::Energy::lane_term`]: gravity and the lumped mixed
 //! stretching); anything else (bending, contact, grabs, loads) is stepped alone. A
@@ -65,7 +66,10 @@ impl Simulation {
         let whole = self.substep.memory().next.is_none_or(|h| h >= dt);
         let system = &self.system;
         let driven = system.energies.iter().any(|e| e.time_dependent());
-        (whole && !driven && system.drivers.is_empty()).then_some(params)
+        // An adaptive member's knots follow decisions a round-off difference could
+        // flip: stepped alone, it keeps exactly its own results.
+        let fixed = self.adapter.is_none();
+        (whole && fixed && !driven && system.drivers.is_empty()).then_some(params)
     }
 }
 
