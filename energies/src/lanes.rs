@@ -59,25 +59,37 @@ impl LaneTerm<'_> {
 /// `3i + c`.
 pub type LaneField = [Lanes];
 
-/// Adds to `energy` each lane's energy of `terms` (compatible, see
-/// [`LaneTerm::compatible`]) at the positions `q`, and with `derivatives` its gradient and
-/// exact Hessian. No allocation.
+/// Adds to `energy` each lane's energy of `terms` at the positions `q`, and with
+/// `derivatives` its gradient and exact Hessian. No allocation. Returns false, adding
+/// nothing, if the terms are not one form on one shape fitting `q` and the derivatives'
+/// sizes ([`LaneTerm::compatible`]).
 pub fn add_lanes(
     terms: &[LaneTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
     derivatives: Option<Derivatives<'_>>,
-) {
+) -> bool {
+    let n = q.len() / 3;
+    let (bw, sized) = derivatives.as_ref().map_or((usize::MAX - 1, true), |d| {
+        let h = &d.hessian;
+        (h.bandwidth(), h.dim() == n && d.gradient.len() == q.len())
+    });
+    if !(sized && q.len() == 3 * n && LaneTerm::compatible(terms, n, bw)) {
+        return false;
+    }
     match &terms[0] {
         LaneTerm::Gravity { .. } => add_gravity(terms, q, energy, derivatives.map(|d| d.gradient)),
-        LaneTerm::Moments(_) => {
-            let moments: [&MomentTerm<'_>; LANES] = std::array::from_fn(|l| match &terms[l] {
-                LaneTerm::Moments(m) => m,
-                LaneTerm::Gravity { .. } => unreachable!("lane terms checked compatible"),
-            });
+        LaneTerm::Moments(first) => {
+            let mut moments = [first; LANES];
+            for (slot, term) in moments.iter_mut().zip(terms) {
+                if let LaneTerm::Moments(m) = term {
+                    *slot = m;
+                }
+            }
             crate::stretching::add_moment_lanes(moments, q, energy, derivatives);
         }
     }
+    true
 }
 
 /// Gravity's energy and gradient, lane by lane.
@@ -158,7 +170,7 @@ mod tests {
             hessian: &mut band,
             hessian_scale: 1.0,
         };
-        add_lanes(&terms, &q, &mut energy, Some(derivatives));
+        assert!(add_lanes(&terms, &q, &mut energy, Some(derivatives)));
         for (l, (rod, e)) in rods.iter().zip(energies).enumerate() {
             let close = |a: Real, b: Real, scale: Real| (a - b).abs() <= 1e-12 * scale;
             assert!(

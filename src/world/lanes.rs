@@ -46,15 +46,16 @@ struct Terms<'a> {
 }
 
 impl LanePotential for Terms<'_> {
-    fn add(&self, q: &[Lanes], energy: &mut Lanes, mut derivatives: Option<Derivatives<'_>>) {
-        for terms in self.terms.iter().flatten() {
-            add_lanes(
-                terms,
-                q,
-                energy,
-                derivatives.as_mut().map(Derivatives::reborrow),
-            );
-        }
+    fn add(
+        &self,
+        q: &[Lanes],
+        energy: &mut Lanes,
+        mut derivatives: Option<Derivatives<'_>>,
+    ) -> bool {
+        self.terms.iter().flatten().all(|terms| {
+            let d = derivatives.as_mut().map(Derivatives::reborrow);
+            add_lanes(terms, q, energy, d)
+        })
     }
 }
 
