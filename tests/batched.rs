@@ -155,3 +155,25 @@ fn a_members_result_does_not_depend_on_its_group() {
     assert!(batched > 0);
     assert_eq!(state(&whole.members[1..]), state(&part.members));
 }
+
+#[test]
+fn a_run_reports_its_batched_steps_and_can_turn_them_off() {
+    let text = hanging_cables(9).replace("duration = 10.0", "duration = 0.5");
+    let scene = Scene::from_toml(&text).expect("scene");
+    let batched = splinerod::run(&scene).expect("run");
+    let off = text.replace(
+        "perturbation = 0.01",
+        "perturbation = 0.01\nbatched = false",
+    );
+    let alone = splinerod::run(&Scene::from_toml(&off).expect("scene")).expect("run");
+    // 9 members, 100 steps: nearly all batched (the first steps of some fall back).
+    assert!(
+        batched.solver.batched_steps >= 850,
+        "{}",
+        batched.solver.batched_steps
+    );
+    assert_eq!(alone.solver.batched_steps, 0);
+    for (a, b) in batched.ensemble.iter().zip(&alone.ensemble) {
+        assert!((a.sag - b.sag).abs() <= 1e-12, "member {}", a.index);
+    }
+}

@@ -70,6 +70,10 @@ pub struct SolverTotals {
     pub knots_removed: usize,
     /// Steps recomputed on a finer basis because their error estimate was rejected.
     pub redone_steps: usize,
+    /// Steps whose solve an ensemble batched with other members' (four at a time, see
+    /// [`crate::Ensemble::batched`]); 0 for a single run.
+    #[serde(default)]
+    pub batched_steps: usize,
 }
 
 /// Contact over the run (scenes with `[contact]`).
@@ -108,6 +112,7 @@ impl SolverTotals {
         self.continuation_steps += s.continuation_steps;
         self.multiplier_updates += s.multiplier_updates;
         self.remainder_iterations += s.remainder_iterations;
+        self.batched_steps += s.batched;
         self.knots_inserted += report.adapt.inserted;
         self.knots_removed += report.adapt.removed;
         self.redone_steps += report.adapt.redone_steps;
@@ -138,6 +143,7 @@ impl AddAssign for SolverTotals {
         self.continuation_steps += o.continuation_steps;
         self.multiplier_updates += o.multiplier_updates;
         self.remainder_iterations += o.remainder_iterations;
+        self.batched_steps += o.batched_steps;
         self.knots_inserted += o.knots_inserted;
         self.knots_removed += o.knots_removed;
         self.redone_steps += o.redone_steps;
