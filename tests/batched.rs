@@ -91,6 +91,15 @@ fn batched_results_are_bit_identical_for_any_thread_count() {
     }
 }
 
+/// Asserts that no member of `text`'s ensemble is batched over `steps` steps and that
+/// every member ends exactly as when stepped alone.
+fn assert_stepped_alone(text: &str, steps: usize) {
+    let alone = run(text, 2, false, steps, 0.005);
+    let batched = run(text, 2, true, steps, 0.005);
+    assert!(batched.1.iter().all(|&c| c == 0));
+    assert_eq!(batched, alone);
+}
+
 #[test]
 fn members_the_batched_form_does_not_cover_are_stepped_alone_exactly() {
     // Bending has no lane form: nothing is batched and nothing changes.
@@ -98,10 +107,7 @@ fn members_the_batched_form_does_not_cover_are_stepped_alone_exactly() {
         "stretch_stiffness = 100.0\n",
         "stretch_stiffness = 100.0\nbending_stiffness = 1e-3\n",
     );
-    let alone = run(&text, 2, false, 50, 0.005);
-    let batched = run(&text, 2, true, 50, 0.005);
-    assert!(batched.1.iter().all(|&c| c == 0));
-    assert_eq!(batched, alone);
+    assert_stepped_alone(&text, 50);
 }
 
 #[test]
@@ -112,10 +118,7 @@ fn adaptive_members_are_stepped_alone_exactly() {
         "[output]",
         "[adaptivity]\ntolerance = 1e-4\nmax_control_points = 40\n\n[output]",
     );
-    let alone = run(&text, 2, false, 40, 0.005);
-    let batched = run(&text, 2, true, 40, 0.005);
-    assert!(batched.1.iter().all(|&c| c == 0));
-    assert_eq!(batched, alone);
+    assert_stepped_alone(&text, 40);
 }
 
 #[test]
