@@ -35,8 +35,8 @@ impl LaneBand {
     /// once grown to the size).
     pub fn reset(&mut self, n: usize, bw: usize) {
         (self.n, self.bw) = (n, bw);
-        self.blocks.clear();
         self.blocks.resize(n * (bw + 1), [ZERO; 9]);
+        self.blocks.fill([ZERO; 9]);
     }
 
     /// Dimension in blocks.

@@ -76,6 +76,14 @@ impl BatchedBandedCholesky {
         self.factor_in_place()
     }
 
+    /// Gives the factor's storage back to `a` (after the solves that needed it), taking
+    /// `a`'s in exchange: a Newton loop that factors, solves and releases each iteration
+    /// assembles into one band only, a working set half the size. The factor is gone.
+    pub fn release_band(&mut self, a: &mut LaneBand) {
+        std::mem::swap(&mut self.u, a);
+        self.factored = false;
+    }
+
     fn factor_in_place(&mut self) -> [bool; LANES] {
         (self.n, self.bw) = (self.u.dim(), self.u.bandwidth());
         self.factored = true;

@@ -11,6 +11,7 @@ use splinerod_core::{Lanes, Pin, Real, Rod, LANES};
 impl LaneEuler {
     /// The pins: each must hold one control point whole, the same in every lane; their
     /// targets for the velocity unknown are \\((p - q_{0,k})/h\\).
+    #[inline(always)]
     pub(super) fn place_pins(
         &mut self,
         rods: [&Rod; LANES],
@@ -78,6 +79,7 @@ impl LaneEuler {
     }
 
     /// Saves the pinned columns of `A` and decouples them (identity on the diagonal).
+    #[inline(always)]
     pub(super) fn eliminate_pins(&mut self) {
         let (n, bw) = (self.n, self.bw);
         let width = 2 * bw + 1;
@@ -103,6 +105,7 @@ impl LaneEuler {
 
     /// The right-hand side `b = −r` rewritten for the prescribed steps
     /// \\(\delta_k = c - x_k\\) of the pinned points.
+    #[inline(always)]
     pub(super) fn apply_pin_targets(&mut self) {
         let (n, bw) = (self.n, self.bw);
         let width = 2 * bw + 1;
@@ -129,6 +132,7 @@ impl LaneEuler {
     }
 
     /// \\(\delta_k = c - x_k\\) of pin `e` at control point `k`.
+    #[inline(always)]
     fn delta(&self, e: usize, k: usize) -> [Lanes; 3] {
         std::array::from_fn(|c| {
             std::array::from_fn(|l| self.targets[e][c][l] - self.x[3 * k + c][l])
@@ -136,6 +140,7 @@ impl LaneEuler {
     }
 
     /// Whether lane `l`'s iterate meets its pins (the line search runs only then).
+    #[inline(always)]
     pub(super) fn feasible(&self, l: usize) -> bool {
         self.pins.iter().enumerate().all(|(e, &k)| {
             let t = &self.targets[e];
@@ -147,6 +152,7 @@ impl LaneEuler {
 
     /// The pins' multipliers \\(\mu_k = r_k + (A\Delta x)_k\\) from the saved columns;
     /// per lane the norm of \\(r - G^T\mu\\) and the slope \\((r - G^T\mu)\cdot\Delta x\\).
+    #[inline(always)]
     pub(super) fn pin_multipliers_and_slope(&mut self) -> (Lanes, Lanes) {
         let (n, bw) = (self.n, self.bw);
         let width = 2 * bw + 1;
