@@ -149,7 +149,8 @@ impl Simulation {
         let (solver, substeps, fresh) = loop {
             let (solver, substeps) = self.integrate_or_restore(dt)?;
             self.last_dt = dt;
-            let stage = Instant::now();
+            // Only stages with work are timed (see `try_substep`).
+            let stage = self.estimation.is_some().then(Instant::now);
             let fresh = self.estimate_if_due()?;
             let rejected = fresh && redone < MAX_REDONE_STEPS && self.rejected();
             let inserted = if rejected {
@@ -158,7 +159,9 @@ impl Simulation {
             } else {
                 0
             };
-            self.clock.adapt += stage.elapsed().as_secs_f64();
+            if let Some(stage) = stage {
+                self.clock.adapt += stage.elapsed().as_secs_f64();
+            }
             if inserted > 0 {
                 redone += 1;
                 redo_inserted += inserted;
@@ -184,9 +187,11 @@ impl Simulation {
         if !integrator.conserves_energy() && !integrator.solves_equilibrium() {
             self.system.update_multipliers(false);
         }
-        let stage = Instant::now();
+        let stage = self.adapter.is_some().then(Instant::now);
         let mut adapt = self.apply_adapter(fresh)?;
-        self.clock.adapt += stage.elapsed().as_secs_f64();
+        if let Some(stage) = stage {
+            self.clock.adapt += stage.elapsed().as_secs_f64();
+        }
         adapt.redone_steps = redone;
         adapt.inserted += redo_inserted;
         let error_estimate = fresh

@@ -212,7 +212,9 @@ impl Simulation {
             self.substep.saved_q.clone_from(&rod.positions);
             self.substep.saved_v.clone_from(&rod.velocities);
         }
-        let drivers = Instant::now();
+        // Only stages with work are timed (a clock read costs as much as a small step's
+        // bookkeeping); an idle stage stays at zero.
+        let drivers = self.system.is_driven().then(Instant::now);
         self.system.time = end;
         self.substep.pins.clear();
         let pins = self.system.pins.iter().map(|p| p.position);
@@ -227,7 +229,9 @@ impl Simulation {
             self.substep.targets.push(g.spring.target);
             g.update(end, rod)?;
         }
-        self.clock.drivers += drivers.elapsed().as_secs_f64();
+        if let Some(drivers) = drivers {
+            self.clock.drivers += drivers.elapsed().as_secs_f64();
+        }
         // Work of the grabs' moving targets on the start state (first half of the rule).
         let work_start = if guard {
             self.total_energy().0 - before.0

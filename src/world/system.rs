@@ -106,6 +106,15 @@ impl RodSystem {
         self
     }
 
+    /// Whether anything in the system moves with time: driven pins, keyframed loads,
+    /// grabs or time-dependent energies (else [`Self::drive`] changes nothing).
+    pub fn is_driven(&self) -> bool {
+        !self.drivers.is_empty()
+            || !self.grabs.is_empty()
+            || self.loads.iter().any(|l| l.path.is_some())
+            || self.energies.iter().any(|e| e.time_dependent())
+    }
+
     /// Moves every driven pin to its path's position at time `t`, and sets every
     /// keyframed load's force.
     pub fn drive(&mut self, t: Real) {
