@@ -190,15 +190,19 @@ fn add_function_blocks<const FUSED: bool>(
         let u: [Lanes; 3] = std::array::from_fn(|k| splinerod_core::lanes::mul(va[k], c));
         let row = hessian.row_mut(first + a);
         for ((block, vb), gab) in row.iter_mut().zip(&db[a..]).zip(&g[rows[a]..]) {
+            // The block summed in registers and stored once (a store followed by a
+            // partial reload of the same entry stalls the store forwarding).
+            let mut sum = *block;
             for (col, vc) in vb.iter().enumerate() {
                 for (r, ur) in u.iter().enumerate() {
-                    fma::<FUSED>(&mut block[3 * col + r], *ur, *vc);
+                    fma::<FUSED>(&mut sum[3 * col + r], *ur, *vc);
                 }
             }
             let d = splinerod_core::lanes::mul(lambda, *gab);
             for e in [0, 4, 8] {
-                block[e] = splinerod_core::lanes::add(block[e], d);
+                sum[e] = splinerod_core::lanes::add(sum[e], d);
             }
+            *block = sum;
         }
     }
 }
