@@ -69,14 +69,72 @@ pub(crate) fn for_each_rhs(
     Ok(())
 }
 
+/// A 3×3 block's entries, column-major: `(r, c)` at `3c + r` (the storage of
+/// [`Matrix3`]).
+type Entries = [Real; 9];
+
+/// The entries of `m`.
+#[inline(always)]
+fn entries(m: &Matrix3<Real>) -> Entries {
+    let s = m.as_slice();
+    std::array::from_fn(|e| s[e])
+}
+
 /// Inverse of a lower triangular 3×3 matrix with a non-zero diagonal (forward
 /// substitution written out).
 pub(crate) fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
-    let (a, b, c) = (1.0 / l[(0, 0)], 1.0 / l[(1, 1)], 1.0 / l[(2, 2)]);
-    let m10 = -l[(1, 0)] * a * b;
-    let m21 = -l[(2, 1)] * b * c;
-    let m20 = -(l[(2, 0)] * a + l[(2, 1)] * m10) * c;
-    Matrix3::new(a, 0.0, 0.0, m10, b, 0.0, m20, m21, c)
+    let at = |r: usize, c: usize| l[(r, c)];
+    let lower = [at(0, 0), at(1, 0), at(2, 0), at(1, 1), at(2, 1), at(2, 2)];
+    Matrix3::from_column_slice(&lower_inverse_entries(lower))
+}
+
+/// The entries of \(L^{-1}\) for the lower triangular `L` given as
+/// `[l00, l10, l20, l11, l21, l22]`.
+#[inline(always)]
+fn lower_inverse_entries([l00, l10, l20, l11, l21, l22]: [Real; 6]) -> Entries {
+    let (a, b, c) = (1.0 / l00, 1.0 / l11, 1.0 / l22);
+    let m10 = -l10 * a * b;
+    let m21 = -l21 * b * c;
+    let m20 = -(l20 * a + l21 * m10) * c;
+    [a, m10, m20, 0.0, b, m21, 0.0, 0.0, c]
+}
+
+/// \(L^{-1}\) of the Cholesky factor \(L L^T = s\) of a symmetric 3×3 block, with
+/// the arithmetic of nalgebra's `Matrix3::cholesky` (column by column, each pivot
+/// square-rooted when positive), or `None` if a pivot is not positive or the inverse
+/// not finite.
+#[inline(always)]
+fn inverse_cholesky(s: &Entries) -> Option<Entries> {
+    let pivot = |d: Real| (d > 0.0).then(|| d.sqrt());
+    let l00 = pivot(s[0])?;
+    let (l10, l20) = (s[1] / l00, s[2] / l00);
+    let l11 = pivot(-l10 * l10 + s[4])?;
+    let l21 = (-l10 * l20 + s[5]) / l11;
+    let l22 = pivot(-l21 * l21 + (-l20 * l20 + s[8]))?;
+    let inverse = lower_inverse_entries([l00, l10, l20, l11, l21, l22]);
+    inverse.iter().all(|x| x.is_finite()).then_some(inverse)
+}
+
+/// `s −= aᵀ b` for 3×3 blocks: each entry of the product a dot product of two columns,
+/// \((a_0 b_0 + a_1 b_1) + a_2 b_2\), then subtracted (nalgebra's order).
+#[inline(always)]
+fn sub_transposed_times(s: &mut Entries, a: &Entries, b: &Entries) {
+    for c in 0..3 {
+        for r in 0..3 {
+            let p = a[3 * r] * b[3 * c] + a[3 * r + 1] * b[3 * c + 1] + a[3 * r + 2] * b[3 * c + 2];
+            s[3 * c + r] -= p;
+        }
+    }
+}
+
+/// `a b` for 3×3 blocks, each entry \((a_{r0} b_{0c} + a_{r1} b_{1c}) + a_{r2} b_{2c}\)
+/// (nalgebra's order).
+#[inline(always)]
+fn times(a: &Entries, b: &Entries) -> Entries {
+    std::array::from_fn(|e| {
+        let (r, c) = (e % 3, e / 3);
+        a[r] * b[3 * c] + a[3 + r] * b[3 * c + 1] + a[6 + r] * b[3 * c + 2]
+    })
 }
 
 impl BandedCholesky {
@@ -125,25 +183,22 @@ pub(crate) fn factor_blocks(
         let len = w.min(rest.len());
         let row = &mut rest[..len];
         // Diagonal block.
-        let mut s = row[0];
+        let mut s = entries(&row[0]);
         for k in i.saturating_sub(bw)..i {
-            let uki = done[k * w + (i - k)];
-            s -= uki.tr_mul(&uki);
+            let uki = entries(&done[k * w + (i - k)]);
+            sub_transposed_times(&mut s, &uki, &uki);
         }
-        let l = s.cholesky().ok_or_else(not_definite)?.l();
-        let linv = lower_inverse(&l);
-        if !linv.iter().all(|x| x.is_finite()) {
-            return Err(not_definite());
-        }
-        row[0] = linv;
+        let linv = inverse_cholesky(&s).ok_or_else(not_definite)?;
+        row[0] = Matrix3::from_column_slice(&linv);
         // Off-diagonal blocks of row i.
         for j in i + 1..(i + w).min(n) {
-            let mut m = row[j - i];
+            let mut m = entries(&row[j - i]);
             for k in j.saturating_sub(bw)..i {
-                m -= done[k * w + (i - k)].tr_mul(&done[k * w + (j - k)]);
+                let a = entries(&done[k * w + (i - k)]);
+                sub_transposed_times(&mut m, &a, &entries(&done[k * w + (j - k)]));
             }
             // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
-            row[j - i] = linv * m;
+            row[j - i] = Matrix3::from_column_slice(&times(&linv, &m));
         }
     }
     Ok(())
@@ -223,4 +278,47 @@ fn sub_product(r: &mut [Real; 3], m: &Matrix3<Real>, v: &[Real]) {
 fn sub_transposed_product(r: &mut [Real; 3], m: &Matrix3<Real>, v: &[Real]) {
     let p = transposed_product(m, v);
     r.iter_mut().zip(p).for_each(|(r, p)| *r -= p);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pseudo-random 3×3 blocks: `k`-th of a fixed sequence.
+    fn block(k: usize) -> Matrix3<Real> {
+        Matrix3::from_fn(|r, c| ((k * 9 + 3 * c + r) as Real * 0.731 + 0.2).sin() * 3.7)
+    }
+
+    #[test]
+    fn the_written_out_block_arithmetic_is_nalgebras_bit_for_bit() {
+        let bits = |e: &[Real]| e.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for k in 0..200 {
+            let (a, b, s) = (block(3 * k), block(3 * k + 1), block(3 * k + 2));
+            let mut ours = entries(&s);
+            sub_transposed_times(&mut ours, &entries(&a), &entries(&b));
+            assert_eq!(bits(&ours), bits((s - a.tr_mul(&b)).as_slice()));
+            assert_eq!(
+                bits(&times(&entries(&a), &entries(&b))),
+                bits((a * b).as_slice())
+            );
+            let spd = a.tr_mul(&a) + Matrix3::identity() * 0.1 * k as Real;
+            let expected = spd.cholesky().map(|c| lower_inverse(&c.l()));
+            let ours = inverse_cholesky(&entries(&spd));
+            match (expected, ours) {
+                (Some(e), Some(o)) => assert_eq!(bits(e.as_slice()), bits(&o)),
+                (e, o) => assert_eq!(e.is_some(), o.is_some(), "block {k}"),
+            }
+        }
+    }
+
+    #[test]
+    fn indefinite_and_zero_pivots_are_refused() {
+        let mut s = entries(&Matrix3::identity());
+        s[4] = -1.0;
+        assert!(inverse_cholesky(&s).is_none());
+        s[4] = 0.0;
+        assert!(inverse_cholesky(&s).is_none());
+        s[4] = Real::NAN;
+        assert!(inverse_cholesky(&s).is_none());
+    }
 }
