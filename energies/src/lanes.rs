@@ -105,19 +105,27 @@ fn add_gravity(
             *slot = (*g, masses);
         }
     }
-    for (l, (g, masses)) in gravity.iter().enumerate() {
-        let mut sum = 0.0;
-        for (i, m) in masses.iter().enumerate() {
-            let qi = Vector3::new(q[3 * i][l], q[3 * i + 1][l], q[3 * i + 2][l]);
-            sum += m * g.dot(&qi);
+    // Each lane's arithmetic as before (Σᵢ mᵢ (g·qᵢ), gradient −g mᵢ), over the lanes
+    // at once.
+    let n = gravity.iter().map(|(_, m)| m.len()).min().unwrap_or(0);
+    let g: [Lanes; 3] = std::array::from_fn(|c| std::array::from_fn(|l| gravity[l].0[c]));
+    let mut sum = [0.0; LANES];
+    for i in 0..n {
+        let m: Lanes = std::array::from_fn(|l| gravity[l].1[i]);
+        for l in 0..LANES {
+            let dot = g[0][l] * q[3 * i][l] + g[1][l] * q[3 * i + 1][l] + g[2][l] * q[3 * i + 2][l];
+            sum[l] += m[l] * dot;
         }
-        energy[l] -= sum;
+    }
+    for l in 0..LANES {
+        energy[l] -= sum[l];
     }
     if let Some(gradient) = gradient {
-        for (l, (g, masses)) in gravity.iter().enumerate() {
-            for (i, m) in masses.iter().enumerate() {
-                for c in 0..3 {
-                    gradient[3 * i + c][l] -= g[c] * m;
+        for i in 0..n {
+            let m: Lanes = std::array::from_fn(|l| gravity[l].1[i]);
+            for c in 0..3 {
+                for l in 0..LANES {
+                    gradient[3 * i + c][l] -= g[c][l] * m[l];
                 }
             }
         }

@@ -12,7 +12,7 @@
 //! \\(\hat q = q_0\\), \\(\hat v = v_0\\) and β = ρ = h.
 
 use crate::incremental::{Increment, Stepper};
-use crate::lane_euler::{fingerprint, LaneOutcome};
+use crate::lane_euler::{same_bits, LaneOutcome};
 use crate::newton::NewtonParams;
 use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -32,8 +32,8 @@ pub struct ImplicitEuler {
 struct Preloaded {
     live: bool,
     dt: Real,
-    /// [`fingerprint`] of the start state.
-    start: u64,
+    /// The start state (positions, velocities).
+    start: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
     end: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
     stats: StepStats,
     forces: Vec<Vector3<Real>>,
@@ -45,7 +45,8 @@ impl Preloaded {
         let rod = system.rod();
         self.dt.to_bits() == dt.to_bits()
             && rod.positions.len() == self.end.0.len()
-            && fingerprint(&rod.positions, &rod.velocities) == self.start
+            && same_bits(&rod.positions, &self.start.0)
+            && same_bits(&rod.velocities, &self.start.1)
     }
 
     fn outcome(&self) -> LaneOutcome<'_> {
@@ -103,7 +104,10 @@ impl Integrator for ImplicitEuler {
         dt: Real,
     ) {
         let p = &mut self.preloaded;
-        p.start = fingerprint(start.0, start.1);
+        p.start.0.clear();
+        p.start.0.extend_from_slice(start.0);
+        p.start.1.clear();
+        p.start.1.extend_from_slice(start.1);
         p.end.0.clear();
         p.end.0.extend_from_slice(outcome.positions);
         p.end.1.clear();
