@@ -12,7 +12,7 @@
 //! \\(\hat q = q_0\\), \\(\hat v = v_0\\) and β = ρ = h.
 
 use crate::incremental::{Increment, Stepper};
-use crate::lane_euler::{same_bits, LaneOutcome};
+use crate::lane_euler::{fingerprint, LaneOutcome};
 use crate::newton::NewtonParams;
 use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -32,8 +32,8 @@ pub struct ImplicitEuler {
 struct Preloaded {
     live: bool,
     dt: Real,
-    /// The start state (positions, velocities).
-    start: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
+    /// [`fingerprint`] of the start state.
+    start: u64,
     end: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
     stats: StepStats,
     forces: Vec<Vector3<Real>>,
@@ -45,17 +45,8 @@ impl Preloaded {
         let rod = system.rod();
         self.dt.to_bits() == dt.to_bits()
             && rod.positions.len() == self.end.0.len()
-            && same_bits(&rod.positions, &self.start.0)
-            && same_bits(&rod.velocities, &self.start.1)
-    }
-
-    fn outcome(&self) -> LaneOutcome<'_> {
-        LaneOutcome {
-            positions: &self.end.0,
-            velocities: &self.end.1,
-            stats: self.stats,
-            pin_forces: &self.forces,
-        }
+            && rod.velocities.len() == self.end.1.len()
+            && fingerprint(&rod.positions, &rod.velocities) == self.start
     }
 }
 
@@ -78,7 +69,10 @@ impl Integrator for ImplicitEuler {
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
         // A preloaded step is used once, and only for the step it was taken as.
         if std::mem::take(&mut self.preloaded.live) && self.preloaded.fits(system, dt) {
-            return self.stepper.accept(system, &self.preloaded.outcome(), dt);
+            let p = &mut self.preloaded;
+            return self
+                .stepper
+                .accept(system, &mut p.end, (p.stats, &p.forces), dt);
         }
         self.stepper.begin(system, dt)?;
         let step = Increment {
@@ -104,10 +98,7 @@ impl Integrator for ImplicitEuler {
         dt: Real,
     ) {
         let p = &mut self.preloaded;
-        p.start.0.clear();
-        p.start.0.extend_from_slice(start.0);
-        p.start.1.clear();
-        p.start.1.extend_from_slice(start.1);
+        p.start = fingerprint(start.0, start.1);
         p.end.0.clear();
         p.end.0.extend_from_slice(outcome.positions);
         p.end.1.clear();

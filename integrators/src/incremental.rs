@@ -313,21 +313,29 @@ impl Stepper {
 
     /// Takes a step solved elsewhere (the batched form, [`crate::lane_euler`], which
     /// checked the start state, the damping and the end state finite) as this scheme's
-    /// own: writes the end state and keeps the pin forces.
+    /// own: the end state `end` (positions, velocities) becomes the rod's by exchanging
+    /// the buffers (`end` is left with the start state), and the pin forces are kept.
     pub fn accept(
         &mut self,
         system: &mut dyn System,
-        outcome: &crate::lane_euler::LaneOutcome<'_>,
+        end: &mut (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
+        (stats, pin_forces): (StepStats, &[Vector3<Real>]),
         dt: Real,
     ) -> Result<StepStats, IntegratorError> {
         positive("dt", dt)?;
         let rod = system.rod_mut();
-        rod.positions.copy_from_slice(outcome.positions);
-        rod.velocities.copy_from_slice(outcome.velocities);
+        let fits = rod.positions.len() == end.0.len() && rod.velocities.len() == end.1.len();
+        if !fits {
+            return Err(IntegratorError::SolverState(
+                "a step solved elsewhere for another number of control points",
+            ));
+        }
+        std::mem::swap(&mut rod.positions, &mut end.0);
+        std::mem::swap(&mut rod.velocities, &mut end.1);
         self.beta = dt;
-        let forces = outcome.pin_forces.iter().map(|f| f * dt);
+        let forces = pin_forces.iter().map(|f| f * dt);
         self.workspace.set_multipliers(forces);
-        Ok(outcome.stats)
+        Ok(stats)
     }
 
     /// Forces the pins exerted on the rod during the last step, N: the KKT multipliers
