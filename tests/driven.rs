@@ -161,3 +161,26 @@ fn bad_paths_name_the_field() {
         assert_field(&rejected(&SCENE.replace(from, to)), field);
     }
 }
+
+#[test]
+fn only_stages_with_work_are_timed() {
+    // A driven pin: the drivers stage has work and is timed.
+    let driven = run(&Scene::from_toml(SCENE).expect("scene")).expect("run");
+    assert!(
+        driven.stage_seconds.drivers > 0.0,
+        "{:?}",
+        driven.stage_seconds
+    );
+    // Nothing driven, no estimator, no adapter: those stages read no clock and stay
+    // at zero; the solves are still timed.
+    let still = SCENE.replace(
+        "path = [[0.0, 1.0, 0.0, 0.0], [0.5, 0.8, 0.1, 0.0], [1.0, 0.6, 0.2, 0.1]]\ninterpolation = \"smooth\"\n",
+        "",
+    );
+    assert_ne!(still, SCENE);
+    let s = run(&Scene::from_toml(&still).expect("scene"))
+        .expect("run")
+        .stage_seconds;
+    assert_eq!((s.drivers, s.adapt), (0.0, 0.0), "{s:?}");
+    assert!(s.integrate > 0.0 && s.setup > 0.0, "{s:?}");
+}
