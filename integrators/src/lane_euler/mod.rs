@@ -24,12 +24,14 @@
 //! of failed lanes one by one, so a failure changes no result; each lane's result
 //! equals the scalar solver's up to round-off.
 
+mod mass;
 mod pins;
 
 use crate::batched::BatchedBandedCholesky;
 use crate::linear::LinearSolverKind;
 use crate::newton::{NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
 use crate::StepStats;
+use mass::{mass_bilinear, mass_times};
 use nalgebra::Vector3;
 use splinerod_core::lanes::{mul_add, LaneBlock, ZERO};
 use splinerod_core::{Derivatives, LaneBand, Lanes, Pin, Real, Rod, LANES};
@@ -59,6 +61,17 @@ pub struct LaneOutcome<'a> {
     pub stats: StepStats,
     /// The forces the pins exerted, N, one per pin.
     pub pin_forces: &'a [Vector3<Real>],
+}
+
+/// The arguments of one [`LaneEuler::step`], passed on as one.
+#[derive(Clone, Copy)]
+struct StepInput<'a> {
+    rods: [&'a Rod; LANES],
+    pins: [&'a [Pin]; LANES],
+    potential: &'a dyn LanePotential,
+    bandwidth: usize,
+    params: &'a NewtonParams,
+    dt: Real,
 }
 
 /// Buffers of the batched implicit Euler step (no allocation once sized).
@@ -119,45 +132,38 @@ impl LaneEuler {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(LaneFallback("time step"));
         }
+        let input = StepInput {
+            rods,
+            pins,
+            potential,
+            bandwidth,
+            params,
+            dt,
+        };
         #[cfg(target_arch = "x86_64")]
         if splinerod_core::lanes::wide() {
             // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-            return unsafe { self.step_wide(rods, pins, potential, bandwidth, params, dt) };
+            return unsafe { self.step_wide(&input) };
         }
-        self.step_lanes(rods, pins, potential, bandwidth, params, dt)
+        self.step_lanes(&input)
     }
 
     /// [`Self::step_lanes`] compiled for AVX2 (four lanes per instruction instead of
     /// two; the arithmetic is the same, so are the results).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn step_wide(
-        &mut self,
-        rods: [&Rod; LANES],
-        pins: [&[Pin]; LANES],
-        potential: &dyn LanePotential,
-        bandwidth: usize,
-        params: &NewtonParams,
-        dt: Real,
-    ) -> Result<(), LaneFallback> {
-        self.step_lanes(rods, pins, potential, bandwidth, params, dt)
+    unsafe fn step_wide(&mut self, input: &StepInput<'_>) -> Result<(), LaneFallback> {
+        self.step_lanes(input)
     }
 
     /// The step of [`Self::step`] once its settings are checked.
     #[inline(always)]
-    fn step_lanes(
-        &mut self,
-        rods: [&Rod; LANES],
-        pins: [&[Pin]; LANES],
-        potential: &dyn LanePotential,
-        bandwidth: usize,
-        params: &NewtonParams,
-        dt: Real,
-    ) -> Result<(), LaneFallback> {
+    fn step_lanes(&mut self, input: &StepInput<'_>) -> Result<(), LaneFallback> {
         self.failed = [None; LANES];
-        self.gather(rods, bandwidth, params)?;
-        self.place_pins(rods, pins, dt)?;
-        self.newton(potential, bandwidth, params, dt);
+        let (bandwidth, params, dt) = (input.bandwidth, input.params, input.dt);
+        self.gather(input.rods, bandwidth, params)?;
+        self.place_pins(input.rods, input.pins, dt)?;
+        self.newton(input.potential, bandwidth, params, dt);
         self.scatter(dt);
         Ok(())
     }
@@ -492,46 +498,4 @@ pub fn fingerprint(positions: &[Vector3<Real>], velocities: &[Vector3<Real>]) ->
     chains
         .iter()
         .fold(lengths, |h, &c| (h ^ c).wrapping_mul(PRIME))
-}
-
-/// `y = M x` for the lane mass matrices (upper band `m`, bandwidth `bw`) on a field.
-#[inline(always)]
-fn mass_times(m: &[Lanes], bw: usize, x: &[Lanes], y: &mut [Lanes]) {
-    let (n, w) = (x.len() / 3, bw + 1);
-    y.fill(ZERO);
-    for i in 0..n {
-        let row = &m[i * w..(i + 1) * w];
-        for c in 0..3 {
-            mul_add(&mut y[3 * i + c], x[3 * i + c], row[0]);
-        }
-        for k in 1..w.min(n - i) {
-            for c in 0..3 {
-                mul_add(&mut y[3 * i + c], x[3 * (i + k) + c], row[k]);
-                mul_add(&mut y[3 * (i + k) + c], x[3 * i + c], row[k]);
-            }
-        }
-    }
-}
-
-/// \\(\sum_{ij} M_{ij}\, x_i \cdot y_j\\) per lane.
-#[inline(always)]
-fn mass_bilinear(m: &[Lanes], bw: usize, x: &[Lanes], y: &[Lanes]) -> Lanes {
-    let (n, w) = (x.len() / 3, bw + 1);
-    let mut sum = ZERO;
-    let dot = |i: usize, j: usize| -> Lanes {
-        let mut d = ZERO;
-        for c in 0..3 {
-            mul_add(&mut d, x[3 * i + c], y[3 * j + c]);
-        }
-        d
-    };
-    for i in 0..n {
-        let row = &m[i * w..(i + 1) * w];
-        mul_add(&mut sum, row[0], dot(i, i));
-        for k in 1..w.min(n - i) {
-            let both = splinerod_core::lanes::add(dot(i, i + k), dot(i + k, i));
-            mul_add(&mut sum, row[k], both);
-        }
-    }
-    sum
 }
