@@ -75,14 +75,15 @@ type Entries = [Real; 9];
 
 /// The entries of `m`.
 #[inline(always)]
-fn entries(m: &Matrix3<Real>) -> Entries {
+pub(crate) fn entries(m: &Matrix3<Real>) -> Entries {
     let s = m.as_slice();
     std::array::from_fn(|e| s[e])
 }
 
 /// Inverse of a lower triangular 3×3 matrix with a non-zero diagonal (forward
 /// substitution written out).
-pub(crate) fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
+#[cfg(test)]
+fn lower_inverse(l: &Matrix3<Real>) -> Matrix3<Real> {
     let at = |r: usize, c: usize| l[(r, c)];
     let lower = [at(0, 0), at(1, 0), at(2, 0), at(1, 1), at(2, 1), at(2, 2)];
     Matrix3::from_column_slice(&lower_inverse_entries(lower))
@@ -104,7 +105,7 @@ fn lower_inverse_entries([l00, l10, l20, l11, l21, l22]: [Real; 6]) -> Entries {
 /// square-rooted when positive), or `None` if a pivot is not positive or the inverse
 /// not finite.
 #[inline(always)]
-fn inverse_cholesky(s: &Entries) -> Option<Entries> {
+pub(crate) fn inverse_cholesky(s: &Entries) -> Option<Entries> {
     let pivot = |d: Real| (d > 0.0).then(|| d.sqrt());
     let l00 = pivot(s[0])?;
     let (l10, l20) = (s[1] / l00, s[2] / l00);

@@ -22,7 +22,7 @@
 //! `integrators/tests/far_blocks.rs`. Factorisation and solves allocate nothing once the
 //! pattern is sized (the symbolic phase does).
 
-use crate::banded_cholesky::lower_inverse;
+use crate::banded_cholesky::{entries, inverse_cholesky};
 use crate::block_pattern::BlockShape;
 use crate::IntegratorError;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -359,15 +359,14 @@ impl BlockSparseCholesky {
                     self.lower[s] -= update;
                 }
             }
-            let l = d.cholesky().ok_or(IntegratorError::NotPositiveDefinite {
-                context: "block sparse Cholesky",
-            })?;
-            let linv = lower_inverse(&l.l());
-            if !linv.iter().all(|x| x.is_finite()) {
-                return Err(IntegratorError::NotPositiveDefinite {
+            // nalgebra's Cholesky and the inverse of its factor, written out (the same
+            // arithmetic; `None` for a pivot that is not positive or an inverse that is
+            // not finite).
+            let linv = inverse_cholesky(&entries(&d))
+                .map(|e| Matrix3::from_column_slice(&e))
+                .ok_or(IntegratorError::NotPositiveDefinite {
                     context: "block sparse Cholesky",
-                });
-            }
+                })?;
             self.diag[j] = linv;
             for q in column {
                 self.lower[q] *= linv.transpose();

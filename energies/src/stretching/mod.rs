@@ -102,11 +102,13 @@ pub struct Stretching {
 /// A rest curve: its basis and control points.
 type RestCurve = (Box<dyn BasisSpace>, Vec<Vector3<Real>>);
 
-/// A rest curve \\(I_0\\) and its metric \\(g_0 = |I_0'|^2\\) at the rod's quadrature points.
+/// A rest curve \\(I_0\\) and its metric \\(g_0 = |I_0'|^2\\) at the rod's quadrature points,
+/// with \\(g_0^{-3/2}\\) (see [`rest_scale`]).
 #[derive(Debug, Clone)]
 struct RestMetric {
     curve: Arc<RestCurve>,
     g0: Vec<Real>,
+    scale: Vec<Real>,
 }
 
 impl RestMetric {
@@ -127,6 +129,8 @@ impl RestMetric {
             }
             self.g0.push(g0);
         }
+        self.scale.clear();
+        self.scale.extend(self.g0.iter().map(|&g0| rest_scale(g0)));
         Ok(())
     }
 }
@@ -195,6 +199,7 @@ impl Stretching {
         let mut rest = RestMetric {
             curve,
             g0: Vec::new(),
+            scale: Vec::new(),
         };
         rest.tabulate(rod)?;
         s.rest = Some(rest);
@@ -208,6 +213,7 @@ impl Stretching {
             // The rest curve was regular where tabulated first; it stays so at any s.
             if rest.tabulate(rod).is_err() {
                 rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
+                rest.scale.iter_mut().for_each(|g| *g = Real::NAN);
             }
         }
         let rest = &self.rest;
@@ -238,6 +244,15 @@ impl Stretching {
         self.rest.as_ref().map_or(1.0, |r| r.g0[p])
     }
 
+    /// Rest metric at quadrature point `p` and its [`rest_scale`], tabulated (1 and 1
+    /// without a rest curve).
+    #[inline]
+    fn metric(&self, p: usize) -> (Real, Real) {
+        self.rest
+            .as_ref()
+            .map_or((1.0, 1.0), |r| (r.g0[p], r.scale[p]))
+    }
+
     /// \\(g_0(s)\\) of the rest curve at any parameter (1 without one, or where the rest
     /// curve cannot be evaluated).
     fn rest_metric_at(&self, s: Real) -> Real {
@@ -257,8 +272,13 @@ impl Stretching {
 
     /// The 3×3 density Hessian `H(C')` for rest metric `g0`, clamped to PSD for
     /// [`HessianKind::Definite`].
-    fn density_hessian(&self, c1: &Vector3<Real>, g0: Real, kind: HessianKind) -> Matrix3<Real> {
-        let ea = self.stiffness * rest_scale(g0);
+    fn density_hessian(
+        &self,
+        c1: &Vector3<Real>,
+        (g0, scale): (Real, Real),
+        kind: HessianKind,
+    ) -> Matrix3<Real> {
+        let ea = self.stiffness * scale;
         let g2 = c1.norm_squared();
         // H = across·I + β C'C'ᵀ with across = EA(γ²−g₀)/2 and β = (along − across)/γ² = EA.
         let (across, beta) = match kind {
@@ -298,7 +318,7 @@ impl Stretching {
         kind: HessianKind,
         hessian: &mut BlockBanded,
     ) {
-        let h = self.density_hessian(c1, self.g0(p), kind) * qp.weight;
+        let h = self.density_hessian(c1, self.metric(p), kind) * qp.weight;
         debug_assert!(
             hessian.bandwidth() + 1 >= qp.d1.len(),
             "band narrower than d"
@@ -341,9 +361,9 @@ impl Energy for Stretching {
             .points()
             .enumerate()
             .map(|(p, qp)| {
-                let g0 = self.g0(p);
+                let (g0, scale) = self.metric(p);
                 let e = tangent(&qp, &rod.positions).norm_squared() - g0;
-                qp.weight * k * e * e * rest_scale(g0)
+                qp.weight * k * e * e * scale
             })
             .sum()
     }
@@ -354,8 +374,8 @@ impl Energy for Stretching {
         }
         let half = 0.5 * self.stiffness;
         for (p, qp) in rod.quadrature().points().enumerate() {
-            let (c1, g0) = (tangent(&qp, &rod.positions), self.g0(p));
-            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * rest_scale(g0));
+            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
             for (a, &da) in qp.d1.iter().enumerate() {
                 gradient[qp.first + a] += f * da;
             }
@@ -384,8 +404,8 @@ impl Energy for Stretching {
         }
         let half = 0.5 * self.stiffness;
         for (p, qp) in rod.quadrature().points().enumerate() {
-            let (c1, g0) = (tangent(&qp, &rod.positions), self.g0(p));
-            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * rest_scale(g0));
+            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
             for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
                 *g += f * da;
             }
