@@ -46,6 +46,7 @@ mod friction;
 pub mod obstacle;
 mod pair;
 mod penalty;
+mod sample_sums;
 mod skin;
 mod surface;
 
@@ -499,20 +500,22 @@ impl Energy for Contact {
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        let Ok(d) = self.detected(rod) else {
+        let Ok(mut d) = self.detected(rod) else {
             gradient
                 .iter_mut()
                 .for_each(|g| *g = Vector3::repeat(Real::NAN));
             return;
         };
-        let mut weights = [(0, 0.0); 2 * MAX_ORDER];
+        // Each pair's force acts on its two samples (see `sample_sums`).
+        let mut sums = std::mem::take(&mut d.sums);
+        sums.clear(d.samples.s.len());
         for c in &d.pairs {
             let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
-            let len = pair_rows(&d, c, &mut weights);
-            for &(i, w) in &weights[..len] {
-                gradient[i] += force * w;
-            }
+            sums.add_force(c.a, &force);
+            sums.add_force(c.b, &-force);
         }
+        sums.spread_forces(&d.samples, gradient);
+        d.sums = sums;
         drop(d);
         if self.add_surface_gradient(rod, gradient).is_err() {
             gradient
@@ -529,28 +532,36 @@ impl Energy for Contact {
             hessian.scale(Real::NAN);
             return;
         };
-        let mut weights = [(0, 0.0); 2 * MAX_ORDER];
         let mut local = std::mem::take(&mut d.group_hessian);
+        let mut sums = std::mem::take(&mut d.sums);
+        sums.clear(d.samples.s.len());
+        let samples = &d.samples;
+        let first = |k: u32| samples.first[k as usize] as usize;
         for &(start, end) in &d.groups {
             let pairs = &d.pairs[start..end];
-            let order = d.samples.order;
+            let order = samples.order;
             // Each strand's samples touch a run of consecutive control points.
             let run = |side: fn(&SamplePair) -> u32| {
                 let firsts = pairs
                     .iter()
-                    .map(|c| d.samples.first[side(c) as usize] as usize);
+                    .map(|c| samples.first[side(c) as usize] as usize);
                 let (lo, hi) = firsts.fold((usize::MAX, 0), |(lo, hi), f| (lo.min(f), hi.max(f)));
                 lo..hi + order
             };
             local.start(run(|c| c.a), run(|c| c.b));
             for c in pairs {
-                let len = pair_rows(&d, c, &mut weights);
-                local.add(&weights[..len], &self.pair_hessian(&d, c, kind));
+                let m = self.pair_hessian(&d, c, kind);
+                sums.add_block(c.a, &m);
+                sums.add_block(c.b, &m);
+                let a = (c.a, first(c.a), samples.row(c.a as usize));
+                local.add_cross(a, (first(c.b), samples.row(c.b as usize)), &m);
             }
             local.finish(hessian);
         }
+        sums.spread_blocks(samples, hessian);
         local.flush(hessian);
         d.group_hessian = local;
+        d.sums = sums;
         drop(d);
         if self.add_surface_hessian(rod, hessian).is_err() {
             hessian.scale(Real::NAN);

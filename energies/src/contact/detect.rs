@@ -35,6 +35,7 @@
 //! round-off only). No allocation once the buffers have grown.
 
 use super::assemble::GroupHessian;
+use super::sample_sums::SampleSums;
 use super::skin::{Skin, SKIN};
 use nalgebra::Vector3;
 use splinerod_core::proximity::{closest_points_between, BoxSweep};
@@ -80,14 +81,22 @@ impl Samples {
         &self.values[k * self.order..(k + 1) * self.order]
     }
 
-    /// Position of sample `k` for control points `q`.
-    #[inline]
+    /// Position of sample `k` for control points `q`: \(\sum_a b_a q_{first + a}\),
+    /// summed in order (the cubic case written out, same operations).
+    #[inline(always)]
     fn at(&self, k: usize, q: &[Vector3<Real>]) -> Vector3<Real> {
         let first = self.first[k] as usize;
         // The row's control points, sliced once (no bounds check per term).
         let q = &q[first..first + self.order];
+        let row = self.row(k);
+        if let (Ok(q), Ok(b)) = (<&[_; 4]>::try_from(q), <&[Real; 4]>::try_from(row)) {
+            return Vector3::from_fn(|c, _| {
+                let term = |a: usize| q[a][c] * b[a];
+                (((0.0 + term(0)) + term(1)) + term(2)) + term(3)
+            });
+        }
         q.iter()
-            .zip(self.row(k))
+            .zip(row)
             .fold(Vector3::zeros(), |acc, (qa, &b)| acc + qa * b)
     }
 }
@@ -124,6 +133,8 @@ pub(crate) struct Detector {
     pub groups: Vec<(usize, usize)>,
     /// Scratch for assembling one group's Hessian.
     pub group_hessian: GroupHessian,
+    /// Scratch: the pairs' one-sample terms, summed per sample.
+    pub sums: SampleSums,
     /// Candidate segment pairs of the last broad phase.
     candidates: Vec<(u32, u32)>,
     /// Segment pairs the last closest-point search examined.
@@ -344,7 +355,7 @@ impl Detector {
     /// Sample positions at the rod's current control points.
     fn place_samples(&mut self, rod: &Rod) {
         let samples = &mut self.samples;
-        samples.position.clear();
+        // Every entry is overwritten: no need to clear.
         samples.position.resize(samples.s.len(), Vector3::zeros());
         for k in 0..samples.s.len() {
             samples.position[k] = samples.at(k, &rod.positions);

@@ -2,9 +2,9 @@
 //! \\(d - (r_a + r_b)\\), Hessian with respect to the difference of its points, and the
 //! merged basis weights through which it acts on the control points.
 
+use super::assemble::SymBlock;
 use super::detect::{Detector, SamplePair};
 use super::Contact;
-use nalgebra::Matrix3;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::{HessianKind, Real};
 
@@ -25,15 +25,24 @@ impl Contact {
         d: &Detector,
         pair: &SamplePair,
         kind: HessianKind,
-    ) -> Matrix3<Real> {
+    ) -> SymBlock {
         let (weight, gap) = (self.pair_weight(d, pair), self.gap(d, pair));
-        let nn = pair.normal * pair.normal.transpose();
-        let along = nn * (weight * self.penalty.curvature(gap));
-        if kind != HessianKind::Exact {
-            return along;
-        }
-        let turning = weight * self.penalty.slope(gap) / pair.distance;
-        along + (Matrix3::identity() - nn) * turning
+        let along = weight * self.penalty.curvature(gap);
+        let turning = if kind == HessianKind::Exact {
+            weight * self.penalty.slope(gap) / pair.distance
+        } else {
+            0.0
+        };
+        // along · n nᵀ + turning · (I − n nᵀ), by its six entries.
+        let (n, c) = (&pair.normal, along - turning);
+        [
+            n.x * n.x * c + turning,
+            n.y * n.y * c + turning,
+            n.z * n.z * c + turning,
+            n.x * n.y * c,
+            n.x * n.z * c,
+            n.y * n.z * c,
+        ]
     }
 
     /// \\(r_a + r_b\\) of a sample pair.
