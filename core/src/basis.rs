@@ -88,6 +88,13 @@ pub trait BasisSpace: Send + Sync + fmt::Debug {
     /// Writes the non-zero functions at `s` and their first two derivatives into `out`.
     /// Fails if `s` is outside the domain or not finite.
     fn evaluate(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError>;
+    /// Writes the non-zero functions at `s` into `out` (`first`, `order`, `value`; the
+    /// derivatives are unspecified), with the same values as
+    /// [`evaluate`](BasisSpace::evaluate) bit for bit: for positions alone, where the
+    /// derivatives would cost most of an evaluation. The default evaluates them too.
+    fn evaluate_values(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError> {
+        self.evaluate(s, out)
+    }
     /// Inserts the knot value `s` (strictly inside the domain) and returns the exact
     /// old→new coefficient map.
     fn insert_knot(&mut self, s: Real) -> Result<KnotMap, CoreError>;

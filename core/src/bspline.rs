@@ -157,16 +157,16 @@ impl BSplineSpace {
     }
 }
 
-/// The non-zero basis functions of degree `P` (`degree` when `P` is 0) in span `k` of
-/// the knots `t` and their first two derivatives (Piegl & Tiller A2.3).
-#[inline]
-pub(crate) fn derivatives<const P: usize>(
+/// The triangular table of Piegl & Tiller A2.3 for degree `P` (`degree` when `P` is 0)
+/// in span `k` of the knots `t` at `s`: the basis values in column `p`, the knot
+/// differences below the diagonal.
+#[inline(always)]
+fn value_table<const P: usize>(
     degree: usize,
     t: &[Real],
     k: usize,
     s: Real,
-    out: &mut BasisValues,
-) {
+) -> [[Real; MAX_ORDER]; MAX_ORDER] {
     let p = if P == 0 { degree } else { P };
     let mut ndu = [[0.0; MAX_ORDER]; MAX_ORDER];
     let (mut left, mut right) = ([0.0; MAX_ORDER], [0.0; MAX_ORDER]);
@@ -183,6 +183,35 @@ pub(crate) fn derivatives<const P: usize>(
         }
         ndu[j][j] = saved;
     }
+    ndu
+}
+
+/// The non-zero basis functions of degree `P` (`degree` when `P` is 0) in span `k` of
+/// the knots `t` alone (the values of [`derivatives`], bit for bit).
+#[inline]
+fn values<const P: usize>(degree: usize, t: &[Real], k: usize, s: Real, out: &mut BasisValues) {
+    let p = if P == 0 { degree } else { P };
+    let ndu = value_table::<P>(degree, t, k, s);
+    out.first = k - p;
+    out.order = p + 1;
+    out.value = [0.0; MAX_ORDER];
+    for j in 0..=p {
+        out.value[j] = ndu[j][p];
+    }
+}
+
+/// The non-zero basis functions of degree `P` (`degree` when `P` is 0) in span `k` of
+/// the knots `t` and their first two derivatives (Piegl & Tiller A2.3).
+#[inline]
+pub(crate) fn derivatives<const P: usize>(
+    degree: usize,
+    t: &[Real],
+    k: usize,
+    s: Real,
+    out: &mut BasisValues,
+) {
+    let p = if P == 0 { degree } else { P };
+    let ndu = value_table::<P>(degree, t, k, s);
     out.first = k - p;
     out.order = p + 1;
     out.value = [0.0; MAX_ORDER];
@@ -276,6 +305,20 @@ impl BasisSpace for BSplineSpace {
     fn evaluate(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError> {
         let k = self.find_span(s)?;
         self.basis_derivatives(k, s, out);
+        Ok(())
+    }
+
+    fn evaluate_values(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError> {
+        let k = self.find_span(s)?;
+        let t = &self.knots;
+        match self.degree {
+            1 => values::<1>(1, t, k, s, out),
+            2 => values::<2>(2, t, k, s, out),
+            3 => values::<3>(3, t, k, s, out),
+            4 => values::<4>(4, t, k, s, out),
+            5 => values::<5>(5, t, k, s, out),
+            p => values::<0>(p, t, k, s, out),
+        }
         Ok(())
     }
 

@@ -176,6 +176,10 @@ impl BasisSpace for PeriodicBSplineSpace {
         self.extended.evaluate(s, out)
     }
 
+    fn evaluate_values(&self, s: Real, out: &mut BasisValues) -> Result<(), CoreError> {
+        self.extended.evaluate_values(s, out)
+    }
+
     fn insert_knot(&mut self, s: Real) -> Result<KnotMap, CoreError> {
         if s == 0.0 || s == self.period {
             return self.insert_at_seam();

@@ -164,6 +164,13 @@ impl<'a> SpanCurve<'a> {
         s.clamp(self.lo, self.hi)
     }
 
+    /// The curve's point at `s` (the `p` of [`Self::jet`], bit for bit).
+    fn point(&self, s: Real) -> Result<Vector3<Real>, CoreError> {
+        let mut b = BasisValues::default();
+        self.rod.basis().evaluate_values(self.clamp(s), &mut b)?;
+        Ok(b.combine(&b.value, &self.rod.positions))
+    }
+
     fn jet(&self, s: Real) -> Result<Jet, CoreError> {
         let mut b = BasisValues::default();
         self.rod.basis().evaluate(self.clamp(s), &mut b)?;
@@ -247,11 +254,11 @@ fn grid_start<'a>(a: &SpanCurve<'a>, b: &SpanCurve<'a>) -> Result<Iterate, CoreE
     let at = |c: &SpanCurve, k: usize| c.lo + c.length() * k as Real / (GRID - 1) as Real;
     let mut pb = [Vector3::zeros(); GRID];
     for (k, p) in pb.iter_mut().enumerate() {
-        *p = b.jet(at(b, k))?.p;
+        *p = b.point(at(b, k))?;
     }
     let (mut best, mut best_d) = ((0, 0), Real::INFINITY);
     for i in 0..GRID {
-        let pa = a.jet(at(a, i))?.p;
+        let pa = a.point(at(a, i))?;
         for (j, p) in pb.iter().enumerate() {
             let d = (pa - p).norm_squared();
             if d < best_d {

@@ -176,3 +176,24 @@ fn specialised_evaluation_matches_the_run_time_degree_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn values_alone_equal_the_values_of_a_full_evaluation_bit_for_bit() {
+    let periodic = crate::PeriodicBSplineSpace::uniform(3, 9, 1.0).expect("periodic");
+    let mut spaces: Vec<Box<dyn BasisSpace>> = vec![Box::new(periodic)];
+    spaces.extend(all_test_spaces().into_iter().map(|s| s.clone_box()));
+    for space in &spaces {
+        let (a, b) = space.domain();
+        let (mut full, mut alone) = (BasisValues::default(), BasisValues::default());
+        for k in 0..=300 {
+            let s = a + (b - a) * k as Real / 300.0;
+            space.evaluate(s, &mut full).expect("evaluate");
+            space.evaluate_values(s, &mut alone).expect("values");
+            let bits = |b: &BasisValues| b.value.map(Real::to_bits);
+            assert_eq!(bits(&alone), bits(&full), "{space:?} at s = {s}");
+            assert_eq!((alone.first, alone.order), (full.first, full.order));
+        }
+        let outside = space.evaluate_values(b + 1.0, &mut alone);
+        assert!(outside.is_err(), "{space:?}: s outside the domain");
+    }
+}

@@ -333,7 +333,7 @@ impl Detector {
                 let m = ((hi - lo) / spacing).ceil().max(1.0) as usize;
                 for j in 0..m {
                     let s = lo + (j as Real + 0.5) * (hi - lo) / m as Real;
-                    rod.basis().evaluate(s, &mut row)?;
+                    rod.basis().evaluate_values(s, &mut row)?;
                     samples.s.push(s);
                     samples.weight.push((hi - lo) / m as Real);
                     samples.first.push(row.first as u32);
