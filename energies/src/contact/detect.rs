@@ -233,7 +233,7 @@ impl Detector {
             let p = &self.samples.position;
             self.skin.build(
                 &self.candidates,
-                &self.segments,
+                (&self.segments, [&self.lower, &self.upper]),
                 p,
                 wide,
                 self.samples.s.len(),

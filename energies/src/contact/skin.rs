@@ -140,11 +140,13 @@ impl Skin {
     }
 
     /// Lists the sample pairs of the candidate segment pairs closer than `wide`, at the
-    /// sample positions `p` (`count` samples in all).
+    /// sample positions `p` (`count` samples in all), given the segments and boxes
+    /// holding their samples. A sample of the first segment farther than `wide` from
+    /// the second's box along some axis has no partner there and is skipped.
     pub fn build(
         &mut self,
         candidates: &[(u32, u32)],
-        segments: &[Segment],
+        (segments, [lower, upper]): (&[Segment], [&[Vector3<Real>]; 2]),
         p: &[Vector3<Real>],
         wide: Real,
         count: usize,
@@ -153,10 +155,20 @@ impl Skin {
         self.groups.clear();
         self.segments.clear();
         let filter = wide * wide * (1.0 + 1e-9);
+        // Generous: the distance test below decides.
+        let reach = wide * (1.0 + 1e-6);
         for &(a, b) in candidates {
             let start = self.near.len();
             let (sa, sb) = (&segments[a as usize], &segments[b as usize]);
+            let (lo, hi) = (
+                lower[b as usize].add_scalar(-reach),
+                upper[b as usize].add_scalar(reach),
+            );
             for i in sa.first..sa.end {
+                let x = &p[i];
+                if (0..3).any(|k| x[k] < lo[k] || x[k] > hi[k]) {
+                    continue;
+                }
                 for j in sb.first..sb.end {
                     if (p[i] - p[j]).norm_squared() < filter {
                         self.near.push((i as u32, j as u32));
