@@ -138,8 +138,14 @@ impl GroupHessian {
     pub fn finish(&mut self, hessian: &mut BlockBanded) {
         self.spread_pending();
         let n = self.index.len();
-        for a in 0..n {
-            for b in a..n {
+        // Cross terms couple the two runs only: with separate runs, the blocks within
+        // each run stay zero (and are not added, nor kept as far blocks).
+        let [(lo, hi, _), (_, _, second)] = self.runs;
+        let separate = hi - lo == second && second < n;
+        let rows = if separate { second } else { n };
+        for a in 0..rows {
+            let from = if separate { second } else { a };
+            for b in from..n {
                 let (i, j) = (self.index[a], self.index[b]);
                 let entries = &self.blocks[a * n + b];
                 if j - i <= hessian.bandwidth() {
