@@ -441,15 +441,16 @@ impl Detector {
         self.upper.clear();
         for (seg, &w) in self.segments.iter().zip(&self.widen) {
             let widen = Vector3::repeat(w);
-            let (lo, hi) = p[seg.first..seg.end].iter().fold(
-                (
-                    Vector3::repeat(Real::INFINITY),
-                    Vector3::repeat(Real::NEG_INFINITY),
-                ),
-                |(lo, hi), x| (lo.inf(x), hi.sup(x)),
-            );
-            self.lower.push(lo - widen);
-            self.upper.push(hi + widen);
+            // Plain comparisons (positions are finite): a min/max instruction each.
+            let (mut lo, mut hi) = ([Real::INFINITY; 3], [Real::NEG_INFINITY; 3]);
+            for x in &p[seg.first..seg.end] {
+                for c in 0..3 {
+                    lo[c] = if x[c] < lo[c] { x[c] } else { lo[c] };
+                    hi[c] = if x[c] > hi[c] { x[c] } else { hi[c] };
+                }
+            }
+            self.lower.push(Vector3::from(lo) - widen);
+            self.upper.push(Vector3::from(hi) + widen);
         }
     }
 
