@@ -107,8 +107,9 @@ type RestCurve = (Box<dyn BasisSpace>, Vec<Vector3<Real>>);
 #[derive(Debug, Clone)]
 struct RestMetric {
     curve: Arc<RestCurve>,
-    g0: Vec<Real>,
-    scale: Vec<Real>,
+    /// Per quadrature point, \\(g_0\\) and \\(g_0^{-3/2}\\) (one buffer: a smaller energy
+    /// object, which an ensemble of thousands of rods feels).
+    g0: Vec<[Real; 2]>,
 }
 
 impl RestMetric {
@@ -127,10 +128,8 @@ impl RestMetric {
                     reason: "the rest curve has zero speed at this material coordinate",
                 });
             }
-            self.g0.push(g0);
+            self.g0.push([g0, rest_scale(g0)]);
         }
-        self.scale.clear();
-        self.scale.extend(self.g0.iter().map(|&g0| rest_scale(g0)));
         Ok(())
     }
 }
@@ -199,7 +198,6 @@ impl Stretching {
         let mut rest = RestMetric {
             curve,
             g0: Vec::new(),
-            scale: Vec::new(),
         };
         rest.tabulate(rod)?;
         s.rest = Some(rest);
@@ -212,13 +210,12 @@ impl Stretching {
         if let Some(rest) = &mut self.rest {
             // The rest curve was regular where tabulated first; it stays so at any s.
             if rest.tabulate(rod).is_err() {
-                rest.g0.iter_mut().for_each(|g| *g = Real::NAN);
-                rest.scale.iter_mut().for_each(|g| *g = Real::NAN);
+                rest.g0.iter_mut().for_each(|g| *g = [Real::NAN; 2]);
             }
         }
         let rest = &self.rest;
         if let Some(m) = &mut self.multipliers {
-            m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p]));
+            m.remap(rod, |p| rest.as_ref().map_or(1.0, |r| r.g0[p][0]));
         }
         self.tabulate(rod);
     }
@@ -241,7 +238,7 @@ impl Stretching {
     /// Rest metric at quadrature point `p` (1 without a rest curve).
     #[inline]
     fn g0(&self, p: usize) -> Real {
-        self.rest.as_ref().map_or(1.0, |r| r.g0[p])
+        self.rest.as_ref().map_or(1.0, |r| r.g0[p][0])
     }
 
     /// Rest metric at quadrature point `p` and its [`rest_scale`], tabulated (1 and 1
@@ -250,7 +247,7 @@ impl Stretching {
     fn metric(&self, p: usize) -> (Real, Real) {
         self.rest
             .as_ref()
-            .map_or((1.0, 1.0), |r| (r.g0[p], r.scale[p]))
+            .map_or((1.0, 1.0), |r| (r.g0[p][0], r.g0[p][1]))
     }
 
     /// \\(g_0(s)\\) of the rest curve at any parameter (1 without one, or where the rest
