@@ -55,6 +55,12 @@ impl GaussLegendre {
     }
 }
 
+/// Consecutive rows of `len` entries of `v`, then empty rows for ever (a table's
+/// optional columns: none when `v` is empty).
+fn rows(v: &[Real], len: usize) -> impl Iterator<Item = &[Real]> + '_ {
+    v.chunks(len.max(1)).chain(std::iter::repeat(&v[..0]))
+}
+
 /// Legendre polynomial P_m(x) and its derivative, by the three-term recurrence.
 fn legendre(m: usize, x: Real) -> (Real, Real) {
     let (mut p0, mut p1) = (1.0, x);
@@ -290,5 +296,39 @@ impl QuadratureTable {
     /// All points, in increasing parameter order.
     pub fn points(&self) -> impl Iterator<Item = QuadPoint<'_>> + '_ {
         (0..self.len()).map(|p| self.point(p))
+    }
+
+    /// The points of [`Self::points`], the table's rows walked in step (no index
+    /// arithmetic or bounds check per point): for the hot loops of energies evaluated
+    /// point by point.
+    pub fn walk(&self) -> impl Iterator<Item = QuadPoint<'_>> + '_ {
+        let o = self.order;
+        // Chunks of at least one entry (`lower` has `degree` per point, `d2` none when
+        // lean), so that every row has one; empty rows are cut from the full slices.
+        let d2 = if self.lean {
+            &self.d2[..0]
+        } else {
+            &self.d2[..]
+        };
+        let lower = rows(&self.lower, o - 1).map(move |r| &r[..r.len().min(o - 1)]);
+        self.s
+            .iter()
+            .zip(&self.weight)
+            .zip(&self.first)
+            .zip(self.value.chunks_exact(o))
+            .zip(self.d1.chunks_exact(o))
+            .zip(rows(d2, o))
+            .zip(lower)
+            .map(
+                |((((((&s, &weight), &first), value), d1), d2), lower)| QuadPoint {
+                    s,
+                    weight,
+                    first: first as usize,
+                    value,
+                    d1,
+                    d2,
+                    lower,
+                },
+            )
     }
 }

@@ -197,3 +197,26 @@ fn values_alone_equal_the_values_of_a_full_evaluation_bit_for_bit() {
         assert!(outside.is_err(), "{space:?}: s outside the domain");
     }
 }
+
+#[test]
+fn walking_the_quadrature_table_gives_each_point_as_indexed() {
+    use crate::quadrature::{QuadPoint, QuadratureTable};
+    let key = |q: &QuadPoint<'_>| {
+        let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let rows = [q.value, q.d1, q.d2, q.lower].map(bits);
+        (q.s.to_bits(), q.weight.to_bits(), q.first, rows)
+    };
+    for space in all_test_spaces() {
+        for lean in [false, true] {
+            let table = QuadratureTable::new(&space, 4).expect("table");
+            let table = if lean {
+                table.without_second_derivatives()
+            } else {
+                table
+            };
+            let walked: Vec<_> = table.walk().map(|q| key(&q)).collect();
+            let indexed: Vec<_> = (0..table.len()).map(|p| key(&table.point(p))).collect();
+            assert_eq!(walked, indexed, "degree {}, lean {lean}", space.degree());
+        }
+    }
+}

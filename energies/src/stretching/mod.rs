@@ -118,7 +118,7 @@ impl RestMetric {
         let (basis, points) = &*self.curve;
         let mut b = BasisValues::default();
         self.g0.clear();
-        for qp in rod.quadrature().points() {
+        for qp in rod.quadrature().walk() {
             basis.evaluate(qp.s, &mut b)?;
             let g0 = b.combine(&b.d1, points).norm_squared();
             if !(g0.is_finite() && g0 > 0.0) {
@@ -370,7 +370,7 @@ impl Energy for Stretching {
             return self.mixed_gradient(rod, gradient);
         }
         let half = 0.5 * self.stiffness;
-        for (p, qp) in rod.quadrature().points().enumerate() {
+        for (p, qp) in rod.quadrature().walk().enumerate() {
             let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
             let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
             for (a, &da) in qp.d1.iter().enumerate() {
@@ -383,7 +383,7 @@ impl Energy for Stretching {
         if self.formulation != StretchFormulation::Pointwise {
             return self.mixed_hessian(rod, kind, None, hessian);
         }
-        for (p, qp) in rod.quadrature().points().enumerate() {
+        for (p, qp) in rod.quadrature().walk().enumerate() {
             let c1 = tangent(&qp, &rod.positions);
             self.add_point_hessian(&qp, &c1, p, kind, hessian);
         }
@@ -400,7 +400,7 @@ impl Energy for Stretching {
             return self.mixed_hessian(rod, kind, Some(gradient), hessian);
         }
         let half = 0.5 * self.stiffness;
-        for (p, qp) in rod.quadrature().points().enumerate() {
+        for (p, qp) in rod.quadrature().walk().enumerate() {
             let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
             let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
             for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
