@@ -33,6 +33,7 @@ mod gram;
 mod lanes;
 mod mixed;
 mod multipliers;
+mod point_batch;
 mod seam;
 mod table;
 mod tensions;
@@ -43,6 +44,7 @@ pub use multipliers::Multipliers;
 
 use crate::Energy;
 use nalgebra::{Matrix3, Vector3};
+use point_batch::{PointBatch, Sums};
 use splinerod_core::{
     BasisSpace, BasisValues, BlockBanded, CoreError, HessianKind, KnotMap, QuadPoint, Real, Rod,
     SavedState, StateReader,
@@ -305,27 +307,18 @@ fn rest_scale(g0: Real) -> Real {
 }
 
 impl Stretching {
-    /// One quadrature point's term of the pointwise Hessian, tangent `c1`.
-    #[inline]
-    fn add_point_hessian(
-        &self,
-        qp: &QuadPoint<'_>,
-        c1: &Vector3<Real>,
-        p: usize,
-        kind: HessianKind,
-        hessian: &mut BlockBanded,
-    ) {
-        let h = self.density_hessian(c1, self.metric(p), kind) * qp.weight;
-        debug_assert!(
-            hessian.bandwidth() + 1 >= qp.d1.len(),
-            "band narrower than d"
-        );
-        for (a, &da) in qp.d1.iter().enumerate() {
-            let row = hessian.band_row_mut(qp.first + a);
-            for (block, &db) in row.iter_mut().zip(&qp.d1[a..]) {
-                *block += h * (da * db);
-            }
+    /// The pointwise gradient (with `sums.gradient`) and Hessian, point by point in
+    /// batches ([`point_batch`]).
+    fn add_point_terms(&self, rod: &Rod, kind: HessianKind, mut sums: Sums<'_>) {
+        let half = 0.5 * self.stiffness;
+        let mut batch = PointBatch::default();
+        for (p, qp) in rod.quadrature().walk().enumerate() {
+            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
+            let h = self.density_hessian(&c1, (g0, scale), kind) * qp.weight;
+            batch.push(&qp, (h, f), &mut sums);
         }
+        batch.flush(&mut sums);
     }
 }
 
@@ -355,7 +348,7 @@ impl Energy for Stretching {
         }
         let k = self.stiffness / 8.0;
         rod.quadrature()
-            .points()
+            .walk()
             .enumerate()
             .map(|(p, qp)| {
                 let (g0, scale) = self.metric(p);
@@ -383,10 +376,8 @@ impl Energy for Stretching {
         if self.formulation != StretchFormulation::Pointwise {
             return self.mixed_hessian(rod, kind, None, hessian);
         }
-        for (p, qp) in rod.quadrature().walk().enumerate() {
-            let c1 = tangent(&qp, &rod.positions);
-            self.add_point_hessian(&qp, &c1, p, kind, hessian);
-        }
+        let gradient = None;
+        self.add_point_terms(rod, kind, Sums { hessian, gradient });
     }
 
     fn add_gradient_and_hessian(
@@ -399,15 +390,8 @@ impl Energy for Stretching {
         if self.formulation != StretchFormulation::Pointwise {
             return self.mixed_hessian(rod, kind, Some(gradient), hessian);
         }
-        let half = 0.5 * self.stiffness;
-        for (p, qp) in rod.quadrature().walk().enumerate() {
-            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
-            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
-            for (g, &da) in gradient[qp.first..].iter_mut().zip(qp.d1) {
-                *g += f * da;
-            }
-            self.add_point_hessian(&qp, &c1, p, kind, hessian);
-        }
+        let gradient = Some(gradient);
+        self.add_point_terms(rod, kind, Sums { hessian, gradient });
     }
 
     fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
