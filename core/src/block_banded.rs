@@ -368,6 +368,44 @@ impl BlockBanded {
         }
     }
 
+    /// [`Self::scale`] by `s`, then [`Self::add_row_scaled_scalar`] of `c` and `m`, in
+    /// one pass over the band (each block scaled, then its diagonal added to: the same
+    /// operations as the two passes, in the same order).
+    #[track_caller]
+    pub fn scale_and_add_row_scaled_scalar(
+        &mut self,
+        s: Real,
+        c: impl Fn(usize) -> Real,
+        m: &SymBanded,
+    ) {
+        assert!(
+            m.dim() == self.n && m.bandwidth() <= self.bandwidth,
+            "shape mismatch"
+        );
+        let (w, n, mw) = (self.bandwidth + 1, self.n, m.bandwidth() + 1);
+        let rows = self
+            .blocks
+            .chunks_exact_mut(w)
+            .zip(m.band().chunks_exact(mw));
+        for (i, (row, mass)) in rows.enumerate() {
+            let ci = c(i);
+            // The mass couples row `i` to the next `mw - 1` points (those that exist).
+            let (near, rest) = row.split_at_mut(mw.min(n - i));
+            for (b, &mik) in near.iter_mut().zip(mass) {
+                *b *= s;
+                let v = ci * mik;
+                b[(0, 0)] += v;
+                b[(1, 1)] += v;
+                b[(2, 2)] += v;
+            }
+            rest.iter_mut().for_each(|b| *b *= s);
+        }
+        self.far.iter_mut().for_each(|f| f.block *= s);
+        self.low_rank_mut()
+            .iter_mut()
+            .for_each(|t| t.coefficient *= s);
+    }
+
     /// Adds \\(\operatorname{diag}(c)\, M \otimes I_3\\): block `(i, j)` gains
     /// `c(i) M_ij I`. Symmetric only when `c(i) = c(j)` wherever `M_ij ≠ 0` (a factor
     /// constant on each block of a block-diagonal `M`, e.g. per joined rod); the upper

@@ -122,12 +122,13 @@ impl IncrementalProblem<'_> {
     /// Turns the potential's Hessian `K` in `a` into \\(\\beta^2 K + (1 + \\beta\\alpha) M\\).
     fn finish_matrix(&self, rod: &Rod, a: &mut BlockBanded) {
         let beta = self.step.beta;
-        a.scale(beta * beta);
+        let (m, s) = (rod.mass_matrix(), beta * beta);
         if self.alpha.per_point.is_empty() {
-            a.add_scaled_scalar(1.0 + beta * self.alpha.uniform, rod.mass_matrix());
+            let c = 1.0 + beta * self.alpha.uniform;
+            a.scale_and_add_row_scaled_scalar(s, |_| c, m);
         } else {
             let alpha = self.alpha;
-            a.add_row_scaled_scalar(|i| 1.0 + beta * alpha.at(i), rod.mass_matrix());
+            a.scale_and_add_row_scaled_scalar(s, |i| 1.0 + beta * alpha.at(i), m);
         }
     }
 }

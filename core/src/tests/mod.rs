@@ -1,5 +1,6 @@
 //! Unit tests of the core kernels.
 mod basis;
+mod block_banded;
 mod knots;
 mod local_update;
 mod periodic;
