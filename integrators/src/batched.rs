@@ -216,28 +216,35 @@ fn times<const FUSED: bool>(l: &Block, m: &Block) -> Block {
 
 /// The inverse of the lower Cholesky factor of the symmetric 3×3 block `s`, lane by
 /// lane; a lane whose pivots are not positive gets the identity and `false` in `ok`.
+/// Each operation runs over the lanes at once (square roots and divisions included),
+/// each lane with the arithmetic of the scalar factor.
 #[inline(always)]
 fn inverse_cholesky(s: &Block, ok: &mut [bool; LANES]) -> Block {
-    let mut out = [ZERO; 9];
-    for l in 0..LANES {
-        let at = |r: usize, c: usize| s[3 * c + r][l];
-        let l00 = at(0, 0).sqrt();
-        let l10 = at(1, 0) / l00;
-        let l20 = at(2, 0) / l00;
-        let l11 = (at(1, 1) - l10 * l10).sqrt();
-        let l21 = (at(2, 1) - l20 * l10) / l11;
-        let l22 = (at(2, 2) - l20 * l20 - l21 * l21).sqrt();
-        let (a, b, c) = (1.0 / l00, 1.0 / l11, 1.0 / l22);
-        let m10 = -l10 * a * b;
-        let m21 = -l21 * b * c;
-        let m20 = -(l20 * a + l21 * m10) * c;
-        let mut inverse = [a, m10, m20, 0.0, b, m21, 0.0, 0.0, c];
-        if !ok[l] || !inverse.iter().all(|x| x.is_finite()) {
-            ok[l] = false;
-            inverse = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-        }
-        for (e, v) in out.iter_mut().zip(inverse) {
-            e[l] = v;
+    let at = |r: usize, c: usize| s[3 * c + r];
+    let (s00, s10, s20, s11, s21, s22) =
+        (at(0, 0), at(1, 0), at(2, 0), at(1, 1), at(2, 1), at(2, 2));
+    let l00: Lanes = std::array::from_fn(|l| s00[l].sqrt());
+    let l10: Lanes = std::array::from_fn(|l| s10[l] / l00[l]);
+    let l20: Lanes = std::array::from_fn(|l| s20[l] / l00[l]);
+    let l11: Lanes = std::array::from_fn(|l| (s11[l] - l10[l] * l10[l]).sqrt());
+    let l21: Lanes = std::array::from_fn(|l| (s21[l] - l20[l] * l10[l]) / l11[l]);
+    let l22: Lanes = std::array::from_fn(|l| (s22[l] - l20[l] * l20[l] - l21[l] * l21[l]).sqrt());
+    let a: Lanes = std::array::from_fn(|l| 1.0 / l00[l]);
+    let b: Lanes = std::array::from_fn(|l| 1.0 / l11[l]);
+    let c: Lanes = std::array::from_fn(|l| 1.0 / l22[l]);
+    let m10: Lanes = std::array::from_fn(|l| -l10[l] * a[l] * b[l]);
+    let m21: Lanes = std::array::from_fn(|l| -l21[l] * b[l] * c[l]);
+    let m20: Lanes = std::array::from_fn(|l| -(l20[l] * a[l] + l21[l] * m10[l]) * c[l]);
+    let mut out = [a, m10, m20, ZERO, b, m21, ZERO, ZERO, c];
+    for (l, ok) in ok.iter_mut().enumerate() {
+        if !*ok || !out.iter().all(|x| x[l].is_finite()) {
+            *ok = false;
+            for (e, v) in out
+                .iter_mut()
+                .zip([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+            {
+                e[l] = v;
+            }
         }
     }
     out
