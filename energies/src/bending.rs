@@ -38,13 +38,22 @@
 //! (called by [`Bending::for_rod`]) rejects degree < 2; the [`Energy`] methods themselves
 //! cannot return errors.
 //!
+//! **Assembly.** Gradient and Hessian come from one pass over the quadrature points
+//! (\\(C'\\), \\(C''\\) evaluated once per point), the density Hessian's blocks written
+//! out entry by entry ([`density_blocks`]) and the points' terms added a span at a time
+//! ([`span_batch`]): the same operations in the same order as the matrix expressions
+//! above summed point by point, so the same bits (tested against that form).
+//!
 //! **Quadrature.** κ² is rational in `s`; the rod's table (`max(d+1, 2d−1)` Gauss points
 //! per span) does not integrate it exactly, so unlike the polynomial stretching energy,
 //! bending changes slightly under knot insertion (the new spans move the quadrature
 //! points). The change is the quadrature error, measured by the conformance harness.
 
+mod span_batch;
+
 use crate::Energy;
 use nalgebra::{Matrix3, Matrix6, Vector3};
+use span_batch::{Entries, PointTerms, SpanBatch, Sums};
 use splinerod_core::{BlockBanded, CoreError, HessianKind, QuadPoint, Real, Rod};
 
 /// Regularisation δ of \\(|C'|^2\\) in the curvature's denominator (dimensionless).
@@ -97,26 +106,30 @@ impl Bending {
         Ok(kappa_squared(&c1, &c2))
     }
 
-    /// Adds the 6×6 density Hessian (scaled by `scale`) at a point to `hessian`.
-    fn add_point_hessian(
-        &self,
-        qp: &QuadPoint<'_>,
-        h6: &Matrix6<Real>,
-        scale: Real,
-        hessian: &mut BlockBanded,
-    ) {
-        let haa: Matrix3<Real> = h6.fixed_view::<3, 3>(0, 0).into_owned() * scale;
-        let hab: Matrix3<Real> = h6.fixed_view::<3, 3>(0, 3).into_owned() * scale;
-        let hbb: Matrix3<Real> = h6.fixed_view::<3, 3>(3, 3).into_owned() * scale;
-        let hba = hab.transpose();
-        for i in 0..qp.d1.len() {
-            let (ai, bi) = (qp.d1[i], qp.d2[i]);
-            for j in i..qp.d1.len() {
-                let (aj, bj) = (qp.d1[j], qp.d2[j]);
-                let block = haa * (ai * aj) + hab * (ai * bj) + hba * (bi * aj) + hbb * (bi * bj);
-                hessian.add_block(qp.first + i, qp.first + j, &block);
+    /// Adds the gradient and (of `kind`) the Hessian, each if `sums` asks for it, point
+    /// by point and a span at a time ([`span_batch`]).
+    fn accumulate(&self, rod: &Rod, kind: HessianKind, mut sums: Sums<'_>) {
+        let k = 0.5 * self.stiffness;
+        let mut batch = SpanBatch::default();
+        for qp in rod.quadrature().points() {
+            let (a, b) = derivatives(&qp, &rod.positions);
+            let scale = qp.weight * k;
+            let mut terms = PointTerms::default();
+            if sums.gradient.is_some() {
+                let d = density(&a, &b);
+                terms.f = [d.fa * scale, d.fb * scale];
             }
+            if sums.hessian.is_some() {
+                terms.h = match kind {
+                    HessianKind::Exact => PointTerms::scaled(density_blocks(&a, &b), scale),
+                    HessianKind::Definite => {
+                        PointTerms::hessian(&clamp_psd(&density_hessian(&a, &b)), scale)
+                    }
+                };
+            }
+            batch.push(&qp, terms, &mut sums);
         }
+        batch.flush(&mut sums);
     }
 }
 
@@ -168,28 +181,46 @@ fn density(a: &Vector3<Real>, b: &Vector3<Real>) -> Density {
     }
 }
 
-/// The exact 6×6 Hessian of κ² with respect to `(a, b)`.
-fn density_hessian(a: &Vector3<Real>, b: &Vector3<Real>) -> Matrix6<Real> {
+/// The blocks \\(f_{aa}, f_{ab}, f_{bb}\\) of the exact Hessian of κ² with respect to
+/// `(a, b)` (module docs), entry by entry: each entry is computed by the operations of
+/// the matrix expressions of the docs, in their order, without the 3×3 temporaries.
+fn density_blocks(a: &Vector3<Real>, b: &Vector3<Real>) -> [Entries; 3] {
     let g = a.norm_squared() + STRETCH_FLOOR;
     let h = 1.0 / (g * g * g);
     let (a2, b2, ab) = (a.norm_squared(), b.norm_squared(), a.dot(b));
     let n = a.cross(b).norm_squared();
-    let id = Matrix3::identity();
     let na = a * (2.0 * b2) - b * (2.0 * ab);
     let nb = b * (2.0 * a2) - a * (2.0 * ab);
-    let naa = (id * b2 - b * b.transpose()) * 2.0;
-    let nbb = (id * a2 - a * a.transpose()) * 2.0;
-    let nab = a * b.transpose() * 4.0 - b * a.transpose() * 2.0 - id * (2.0 * ab);
     let ha = a * (-6.0 * h / g);
-    let haa = id * (-6.0 * h / g) + a * a.transpose() * (48.0 * h / (g * g));
-    let faa = naa * h + na * ha.transpose() + ha * na.transpose() + haa * n;
-    let fab = nab * h + ha * nb.transpose();
-    let fbb = nbb * h;
+    let (haa_id, haa_aa, nab_id) = (-6.0 * h / g, 48.0 * h / (g * g), 2.0 * ab);
+    const IDENTITY: Entries = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    let mut out = [[0.0; 9]; 3];
+    for (e, &id) in IDENTITY.iter().enumerate() {
+        let (r, c) = (e % 3, e / 3);
+        let naa = (id * b2 - b[r] * b[c]) * 2.0;
+        let nbb = (id * a2 - a[r] * a[c]) * 2.0;
+        let nab = (a[r] * b[c]) * 4.0 - (b[r] * a[c]) * 2.0 - id * nab_id;
+        let haa = id * haa_id + (a[r] * a[c]) * haa_aa;
+        out[0][e] = ((naa * h + na[r] * ha[c]) + ha[r] * na[c]) + haa * n;
+        out[1][e] = nab * h + ha[r] * nb[c];
+        out[2][e] = nbb * h;
+    }
+    out
+}
+
+/// The exact 6×6 Hessian of κ² with respect to `(a, b)`.
+fn density_hessian(a: &Vector3<Real>, b: &Vector3<Real>) -> Matrix6<Real> {
+    let [faa, fab, fbb] = density_blocks(a, b).map(|e| Matrix3::from_column_slice(&e));
+    symmetric6(&faa, &fab, &fbb)
+}
+
+/// The symmetric 6×6 matrix of blocks `[[aa, ab], [abᵀ, bb]]`.
+fn symmetric6(aa: &Matrix3<Real>, ab: &Matrix3<Real>, bb: &Matrix3<Real>) -> Matrix6<Real> {
     let mut out = Matrix6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&faa);
-    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&fab);
-    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&fab.transpose());
-    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&fbb);
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(aa);
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(ab);
+    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&ab.transpose());
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(bb);
     out
 }
 
@@ -237,27 +268,32 @@ impl Energy for Bending {
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        let k = 0.5 * self.stiffness;
-        for qp in rod.quadrature().points() {
-            let (a, b) = derivatives(&qp, &rod.positions);
-            let d = density(&a, &b);
-            let (fa, fb) = (d.fa * (qp.weight * k), d.fb * (qp.weight * k));
-            for (i, (&d1, &d2)) in qp.d1.iter().zip(qp.d2).enumerate() {
-                gradient[qp.first + i] += fa * d1 + fb * d2;
-            }
-        }
+        let sums = Sums {
+            gradient: Some(gradient),
+            hessian: None,
+        };
+        self.accumulate(rod, HessianKind::Exact, sums);
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
-        let k = 0.5 * self.stiffness;
-        for qp in rod.quadrature().points() {
-            let (a, b) = derivatives(&qp, &rod.positions);
-            let exact = density_hessian(&a, &b);
-            let h6 = match kind {
-                HessianKind::Exact => exact,
-                HessianKind::Definite => clamp_psd(&exact),
-            };
-            self.add_point_hessian(&qp, &h6, qp.weight * k, hessian);
-        }
+        let sums = Sums {
+            gradient: None,
+            hessian: Some(hessian),
+        };
+        self.accumulate(rod, kind, sums);
+    }
+
+    fn add_gradient_and_hessian(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        gradient: &mut [Vector3<Real>],
+        hessian: &mut BlockBanded,
+    ) {
+        let sums = Sums {
+            gradient: Some(gradient),
+            hessian: Some(hessian),
+        };
+        self.accumulate(rod, kind, sums);
     }
 }

@@ -43,6 +43,8 @@ mod on_segment;
 mod point_force;
 mod point_spring;
 mod stretching;
+#[cfg(test)]
+mod test_rods;
 pub mod twisting;
 
 pub use bending::{Bending, STRETCH_FLOOR};

@@ -122,27 +122,12 @@ mod tests {
     use super::super::{tangent, StretchFormulation, Stretching};
     use crate::Energy;
     use nalgebra::Vector3;
-    use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod};
+    use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
 
     /// A rod of `degree` with `points` quadrature points per span, bent and stretched
-    /// here, compressed there, with a rest shape of its own (`g0 ≠ 1`).
+    /// here, compressed there (with the rest shape of the tests, `g0 ≠ 1`).
     fn rod(degree: usize, points: usize) -> Rod {
-        let material = Material {
-            rest_length: 1.0,
-            linear_density: 0.1,
-        };
-        let basis = BSplineSpace::clamped_uniform(degree, 12, 1.0).expect("basis");
-        let end = Vector3::new(0.9, 0.0, 0.0);
-        let mut rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)
-            .expect("rod")
-            .with_quadrature_points(points)
-            .expect("quadrature");
-        for (i, p) in rod.positions.iter_mut().enumerate() {
-            let t = i as Real;
-            *p = *p * (1.0 + 0.2 * (0.7 * t).sin())
-                + Vector3::new(0.0, 0.05 * (1.3 * t).sin(), 0.03 * t.cos());
-        }
-        rod
+        crate::test_rods::wavy_rod(degree, points, (0.05, 0.03))
     }
 
     /// The gradient and Hessian summed point by point, each term added on its own.
