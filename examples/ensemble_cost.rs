@@ -1,9 +1,9 @@
 //! Time per rod-step of an ensemble of 16-point cables (one Newton iteration per step,
 //! as `bench`'s ensemble figures) against the ensemble's size:
 //! `RAYON_NUM_THREADS=1 cargo run --release --example ensemble_cost [STEPS_TOTAL]
-//! [alone|batched] [SIZE]` for one thread (`STEPS_TOTAL` rod-steps per size, 100 000 by
-//! default; `alone`: every member stepped on its own, not batched; `SIZE`: that ensemble
-//! size only). Small ensembles stay in
+//! [alone|batched] [SIZE] [bending]` for one thread (`STEPS_TOTAL` rod-steps per size,
+//! 100 000 by default; `alone`: every member stepped on its own, not batched; `SIZE`:
+//! that ensemble size only; `bending`: the cables have bending stiffness 1e-3 N·m²). Small ensembles stay in
 //! the caches; from about a thousand members each step streams every member's matrices
 //! and tables from memory, which is what batching members that share a basis (one table
 //! for many rods, #17) would cut.
@@ -23,11 +23,16 @@ fn main() -> Result<(), Error> {
         ..NewtonParams::default()
     };
     let only: Option<usize> = std::env::args().nth(3).and_then(|a| a.parse().ok());
+    let bending = std::env::args().nth(4).as_deref() == Some("bending");
     let counts = only.map_or(vec![10, 100, 1_000, 10_000], |c| vec![c]);
     for count in counts {
         let members = (0..count)
             .map(|_| {
-                let system = pinned_cable(16, 1.05, 100.0)?;
+                let system = if bending {
+                    bending_cable()?
+                } else {
+                    pinned_cable(16, 1.05, 100.0)?
+                };
                 Ok(Simulation::new(
                     system,
                     Box::new(ImplicitEuler::new(params)?),
@@ -46,4 +51,25 @@ fn main() -> Result<(), Error> {
         println!("{count:>6} members: {us:.2} µs per rod-step");
     }
     Ok(())
+}
+
+/// [`pinned_cable`] (16 points, span 1.05 m, EA = 100 N) with bending stiffness 1e-3 N·m²
+/// (and the bending rod's quadrature, 5 points per span with second derivatives).
+fn bending_cable() -> Result<RodSystem, Error> {
+    let material = Material {
+        rest_length: 1.0,
+        linear_density: 0.1,
+    };
+    let basis = BSplineSpace::clamped_uniform(3, 16, 1.0)?;
+    let end = Vector3::new(1.05, 0.0, 0.0);
+    let rod = Rod::straight(material, Box::new(basis), Vector3::zeros(), end)?
+        .with_quadrature_points(5)?;
+    let pins = [Pin::here(&rod, 0.0)?, Pin::here(&rod, 1.0)?];
+    let bending = Bending::for_rod(1e-3, &rod)?;
+    Ok(RodSystem::new(rod)
+        .with_energy(Stretching::new(100.0)?)
+        .with_energy(Gravity::new(Vector3::new(0.0, -9.81, 0.0))?)
+        .with_energy(bending)
+        .with_pin(pins[0])
+        .with_pin(pins[1]))
 }

@@ -100,13 +100,30 @@ fn assert_stepped_alone(text: &str, steps: usize) {
     assert_eq!(batched, alone);
 }
 
-#[test]
-fn members_the_batched_form_does_not_cover_are_stepped_alone_exactly() {
-    // Bending has no lane form: nothing is batched and nothing changes.
-    let text = hanging_cables(6).replace(
+/// The hanging cables of [`hanging_cables`] with bending stiffness `EI = 1e-3 N·m²`.
+fn bending_cables(count: usize) -> String {
+    hanging_cables(count).replace(
         "stretch_stiffness = 100.0\n",
         "stretch_stiffness = 100.0\nbending_stiffness = 1e-3\n",
-    );
+    )
+}
+
+#[test]
+fn members_with_bending_are_batched_and_match_the_members_stepped_alone() {
+    let text = bending_cables(10);
+    let (alone, _) = run(&text, 2, false, 400, 0.005);
+    let (batched, counts) = run(&text, 2, true, 400, 0.005);
+    assert!(counts.iter().all(|&c| c >= 390), "{counts:?}");
+    let gap = relative_gap(&batched, &alone);
+    println!("cables with bending, 400 steps: relative gap {gap:e}");
+    assert!(gap < 1e-12, "{gap:e}");
+}
+
+#[test]
+fn members_the_batched_form_does_not_cover_are_stepped_alone_exactly() {
+    // A clamp has no lane form: nothing is batched and nothing changes.
+    let text = bending_cables(6).replace("at = 0.0\n", "at = 0.0\nclamp = true\n");
+    assert!(text.contains("clamp = true"));
     assert_stepped_alone(&text, 50);
 }
 

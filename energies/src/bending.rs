@@ -49,7 +49,11 @@
 //! bending changes slightly under knot insertion (the new spans move the quadrature
 //! points). The change is the quadrature error, measured by the conformance harness.
 
+mod lanes;
 mod span_batch;
+
+pub(crate) use lanes::add_bending_lanes;
+pub use lanes::BendingTerm;
 
 use crate::Energy;
 use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -250,6 +254,10 @@ impl Energy for Bending {
 
     fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
         self.supports(rod)
+    }
+
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        self.bending_term(rod)
     }
 
     fn name(&self) -> &str {

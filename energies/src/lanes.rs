@@ -16,10 +16,15 @@
 //!   \\(\sum_k \tfrac{EA}{m_k} \partial b_k \partial b_k^T + \lambda_k G_k \otimes I\\)
 //!   (each lane with its own table, stiffness and multipliers).
 //!
+//! - **bending** ([`crate::Bending`]), from the rods' common quadrature table: per point
+//!   the exact curvature density, its gradient and its exact Hessian (each lane with its
+//!   own `EI`).
+//!
 //! Each lane's result equals the energy's own evaluation up to round-off (the same sums,
 //! associated alike; the tests compare them). An energy that is not one of these forms
 //! returns `None` and its rod is stepped on its own, with the same result.
 
+use crate::bending::BendingTerm;
 use crate::stretching::MomentTerm;
 use nalgebra::Vector3;
 use splinerod_core::{Derivatives, Lanes, Real, LANES};
@@ -36,6 +41,8 @@ pub enum LaneTerm<'a> {
     },
     /// The lumped mixed stretching's tabulated moments.
     Moments(MomentTerm<'a>),
+    /// Bending, from the rod's quadrature table.
+    Bending(BendingTerm<'a>),
 }
 
 impl LaneTerm<'_> {
@@ -50,6 +57,7 @@ impl LaneTerm<'_> {
         terms.iter().all(|t| match (t, &terms[0]) {
             (LaneTerm::Gravity { masses, .. }, LaneTerm::Gravity { .. }) => masses.len() == n,
             (LaneTerm::Moments(a), LaneTerm::Moments(b)) => a.fits(n, bw) && a.same_shape(b),
+            (LaneTerm::Bending(a), LaneTerm::Bending(b)) => a.fits(n, bw) && a.same_shape(b),
             _ => false,
         })
     }
@@ -87,6 +95,15 @@ pub fn add_lanes(
                 }
             }
             crate::stretching::add_moment_lanes(moments, q, energy, derivatives);
+        }
+        LaneTerm::Bending(first) => {
+            let mut bending = [first; LANES];
+            for (slot, term) in bending.iter_mut().zip(terms) {
+                if let LaneTerm::Bending(b) = term {
+                    *slot = b;
+                }
+            }
+            crate::bending::add_bending_lanes(bending, q, energy, derivatives);
         }
     }
     true
@@ -135,7 +152,7 @@ fn add_gravity(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Energy, Gravity, Stretching};
+    use crate::{Bending, Energy, Gravity, Stretching};
     use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, LaneBand, Material, Rod};
 
     /// Four rods of one basis, bent and stretched differently.
@@ -236,11 +253,18 @@ mod tests {
                 })
                 .collect();
             check(&rods, &gravity);
+            let bending: Vec<Box<dyn Energy>> = (0..LANES)
+                .map(|l| {
+                    let ei = 1e-3 * (1.0 + l as Real);
+                    Box::new(Bending::for_rod(ei, &rods[l]).expect("bending")) as Box<dyn Energy>
+                })
+                .collect();
+            check(&rods, &bending);
         }
     }
 
     #[test]
-    fn only_the_lumped_mixed_stretching_on_a_current_table_has_a_lane_form() {
+    fn the_lumped_mixed_stretching_has_a_lane_form_on_a_current_table_only() {
         let rod = &rods(3)[0];
         let mut s = Stretching::new(100.0).expect("stretching");
         assert!(s.lane_term(rod).is_none(), "no table yet");
@@ -249,6 +273,23 @@ mod tests {
         s.formulation = crate::StretchFormulation::Pointwise;
         assert!(s.lane_term(rod).is_none());
         let bending = crate::Bending::new(1e-3).expect("bending");
-        assert!(bending.lane_term(rod).is_none());
+        assert!(bending.lane_term(rod).is_some());
+        let lean = rod.clone().without_second_derivatives();
+        assert!(bending.lane_term(&lean).is_none(), "no second derivatives");
+    }
+
+    #[test]
+    fn bending_lanes_need_one_quadrature_table() {
+        let rods = rods(3);
+        let other = rods[1]
+            .clone()
+            .with_quadrature_points(6)
+            .expect("quadrature");
+        let bending = crate::Bending::new(1e-3).expect("bending");
+        let terms: [LaneTerm<'_>; LANES] = std::array::from_fn(|l| {
+            let rod = if l == 1 { &other } else { &rods[l] };
+            bending.lane_term(rod).expect("lane form")
+        });
+        assert!(!LaneTerm::compatible(&terms, rods[0].len(), 5));
     }
 }

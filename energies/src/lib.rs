@@ -47,7 +47,7 @@ mod stretching;
 mod test_rods;
 pub mod twisting;
 
-pub use bending::{Bending, STRETCH_FLOOR};
+pub use bending::{Bending, BendingTerm, STRETCH_FLOOR};
 pub use clamp::Clamp;
 pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary};

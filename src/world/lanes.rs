@@ -19,8 +19,8 @@
 //! whole (no shorter sub-step pending), it does not adapt its knots (whose decisions a
 //! round-off difference could flip), it has no driven pins and no time-dependent
 //! energy, and every energy acting on it has a lane form
-//! ([`splinerod_energies::Energy::lane_term`]: gravity and the lumped mixed
-//! stretching); anything else (bending, contact, grabs, loads) is stepped alone. A
+//! ([`splinerod_energies::Energy::lane_term`]: gravity, the lumped mixed stretching and
+//! bending); anything else (contact, grabs, loads, clamps, twist) is stepped alone. A
 //! batched solve that meets what it does not replicate (see the solver's docs) is
 //! dropped whole and its members are stepped alone too.
 
