@@ -65,17 +65,22 @@ fn relative_gap(a: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn batched_members_match_the_members_stepped_alone_to_round_off() {
-    let text = hanging_cables(10);
-    let (alone, none) = run(&text, 2, false, 1_000, 0.005);
-    let (batched, counts) = run(&text, 2, true, 1_000, 0.005);
-    assert!(none.iter().all(|&c| c == 0));
-    // Every member is batched at nearly every step (the last two share a group of two);
-    // the first few, compressed by the shaking (an indefinite Newton matrix) or needing
-    // a shorter Newton step, fall back.
-    assert!(counts.iter().all(|&c| c >= 990), "{counts:?}");
-    let gap = relative_gap(&batched, &alone);
-    println!("hanging cables, 1 000 steps: relative gap {gap:e}");
-    assert!(gap < 1e-12, "{gap:e}");
+    // Seeds 2, 4, 9 and 15 once differed by up to 7e-12: a line search halving on the
+    // merit's rounding stopped one side's Newton short of the solution (see
+    // `newton::converging`).
+    for seed in [2, 4, 9, 11, 15] {
+        let text = hanging_cables(10).replace("seed = 11", &format!("seed = {seed}"));
+        let (alone, none) = run(&text, 2, false, 1_000, 0.005);
+        let (batched, counts) = run(&text, 2, true, 1_000, 0.005);
+        assert!(none.iter().all(|&c| c == 0));
+        // Every member is batched at nearly every step (the last two share a group of
+        // two); the first few, compressed by the shaking (an indefinite Newton matrix) or
+        // needing a shorter Newton step, fall back.
+        assert!(counts.iter().all(|&c| c >= 990), "seed {seed}: {counts:?}");
+        let gap = relative_gap(&batched, &alone);
+        println!("hanging cables, seed {seed}, 1 000 steps: relative gap {gap:e}");
+        assert!(gap < 1e-12, "seed {seed}: {gap:e}");
+    }
 }
 
 #[test]

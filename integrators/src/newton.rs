@@ -8,7 +8,9 @@
 //! path, see [`crate::linear`]), solves the KKT system by a Schur complement
 //! (the private `kkt` module), and takes the step — first shortened to
 //! [`NewtonParams::max_step`] if longer — halving it while the Armijo condition
-//! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails.
+//! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails —
+//! except a step already converging (at most half the one before, within the round-off
+//! band below), taken whole: its merit change can be below the merit's own rounding.
 //! It stops when the step moves no material point by more than
 //! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
 //!
@@ -258,7 +260,13 @@ pub fn solve(
             full = cap;
         }
         let search = params.line_search && full > tolerance;
-        let (t, reached) = line_search(problem, system, x, ws, search, slope, merit, &mut stats)?;
+        let trust = converging(full, previous[0], tolerance);
+        let step = Trial {
+            search,
+            trust,
+            slope,
+        };
+        let (t, reached) = line_search(problem, system, x, ws, step, merit, &mut stats)?;
         merit = reached;
         problem.on_step(t);
         let stalled = full <= ROUND_OFF_BAND * tolerance
@@ -468,22 +476,48 @@ pub(crate) fn negative_curvature(
     Ok(curvature)
 }
 
+/// Whether a full step of length `full` (after one of `previous`) is Newton converging
+/// near its solution: inside the round-off band and at most half the step before.
+/// There the merit's change, about \(\tfrac12 r \cdot \Delta x\), can sit below the
+/// merit's own rounding (the merit is a sum of terms far larger than their sum, e.g.
+/// gravity's), so the line search would halve the step on noise — and a halved step
+/// that then passes the step test stops Newton short of the solution by the part left
+/// out (a round-off difference then moves the result by up to the tolerance). Such a
+/// step is taken whole (if admissible): the next iteration measures it.
+pub(crate) fn converging(full: Real, previous: Real, tolerance: Real) -> bool {
+    full <= ROUND_OFF_BAND * tolerance && full < 0.5 * previous
+}
+
+/// What the line search is asked to do with a step.
+#[derive(Debug, Clone, Copy)]
+struct Trial {
+    /// Search at all (else the full step is taken).
+    search: bool,
+    /// Take the full step without the merit test ([`converging`]), if admissible.
+    trust: bool,
+    /// The step's slope \(r \cdot \Delta x\).
+    slope: Real,
+}
+
 /// Takes the step `x += t Δx`, halving `t` until the merit decreases enough. The line
 /// search runs only from a feasible iterate (pins satisfied), where `Δx` is a descent
 /// direction; from an infeasible one the full step restores feasibility first. `known`
 /// is the merit at the current iterate if measured already (the previous search's
 /// last trial); returns `t` and the merit at the new iterate if it was measured.
-#[allow(clippy::too_many_arguments)]
 fn line_search(
     problem: &mut dyn NewtonProblem,
     system: &mut dyn System,
     x: &mut [Vector3<Real>],
     ws: &mut NewtonWorkspace,
-    enabled: bool,
-    slope: Real,
+    trial: Trial,
     known: Option<Real>,
     stats: &mut StepStats,
 ) -> Result<(Real, Option<Real>), IntegratorError> {
+    let Trial {
+        search: enabled,
+        trust,
+        slope,
+    } = trial;
     let feasible = (0..ws.constraints.len()).all(|p| {
         let c = ws.constraints.targets[p];
         ws.constraints.gap(p, x).amax() <= 1e-10 * (1.0 + c.amax())
@@ -510,7 +544,8 @@ fn line_search(
         let admissible = !guard || system.admissible();
         let armijo = admissible && phi <= phi0 + 1e-4 * t * slope;
         let noise = admissible && (phi - phi0).abs() <= 1e-14 * phi0.abs();
-        if armijo || noise || t < 1e-8 {
+        let trusted = admissible && trust && t == 1.0;
+        if armijo || noise || trusted || t < 1e-8 {
             if !admissible {
                 // No admissible point along the step: stay where we are.
                 t = 0.0;

@@ -29,7 +29,7 @@ mod pins;
 
 use crate::batched::BatchedBandedCholesky;
 use crate::linear::LinearSolverKind;
-use crate::newton::{NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
+use crate::newton::{converging, NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
 use crate::StepStats;
 use mass::{mass_bilinear, mass_times};
 use nalgebra::Vector3;
@@ -308,6 +308,7 @@ impl LaneEuler {
                 }
                 search[l] = params.line_search
                     && full[l] > self.tolerance[l]
+                    && !converging(full[l], previous[l][0], self.tolerance[l])
                     && slope[l] < 0.0
                     && self.feasible(l);
             }
