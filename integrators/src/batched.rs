@@ -9,9 +9,10 @@
 //! batched ensemble steps (#17: members that share a basis have Newton matrices of the
 //! same band); each lane's result equals the scalar factorisation's up to round-off.
 
+use crate::banded_cholesky::{inverse_factor, PivotArith};
 use crate::IntegratorError;
 use splinerod_core::lanes::{LaneBlock, ZERO};
-use splinerod_core::{BlockBanded, LaneBand};
+use splinerod_core::{BlockBanded, LaneBand, Real};
 pub use splinerod_core::{Lanes, LANES};
 
 /// A 3×3 block per lane, column-major: entry `(r, c)` at `3c + r`.
@@ -214,30 +215,49 @@ fn times<const FUSED: bool>(l: &Block, m: &Block) -> Block {
     out
 }
 
+impl PivotArith for Lanes {
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        std::array::from_fn(|l| self[l] * b[l])
+    }
+    #[inline(always)]
+    fn add(self, b: Self) -> Self {
+        std::array::from_fn(|l| self[l] + b[l])
+    }
+    #[inline(always)]
+    fn sub(self, b: Self) -> Self {
+        std::array::from_fn(|l| self[l] - b[l])
+    }
+    #[inline(always)]
+    fn div(self, b: Self) -> Self {
+        std::array::from_fn(|l| self[l] / b[l])
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.map(Real::sqrt)
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.map(|x| -x)
+    }
+    #[inline(always)]
+    fn one() -> Self {
+        [1.0; LANES]
+    }
+}
+
 /// The inverse of the lower Cholesky factor of the symmetric 3×3 block `s`, lane by
-/// lane; a lane whose pivots are not positive gets the identity and `false` in `ok`.
-/// Each operation runs over the lanes at once (square roots and divisions included),
-/// each lane with the arithmetic of the scalar factor.
+/// lane; a lane whose leading minors are not positive gets the identity and `false` in
+/// `ok`. Each operation runs over the lanes at once (square roots and divisions
+/// included), each lane with the arithmetic of the scalar factor
+/// ([`crate::banded_cholesky::inverse_factor`]).
 #[inline(always)]
 fn inverse_cholesky(s: &Block, ok: &mut [bool; LANES]) -> Block {
-    let at = |r: usize, c: usize| s[3 * c + r];
-    let (s00, s10, s20, s11, s21, s22) =
-        (at(0, 0), at(1, 0), at(2, 0), at(1, 1), at(2, 1), at(2, 2));
-    let l00: Lanes = std::array::from_fn(|l| s00[l].sqrt());
-    let l10: Lanes = std::array::from_fn(|l| s10[l] / l00[l]);
-    let l20: Lanes = std::array::from_fn(|l| s20[l] / l00[l]);
-    let l11: Lanes = std::array::from_fn(|l| (s11[l] - l10[l] * l10[l]).sqrt());
-    let l21: Lanes = std::array::from_fn(|l| (s21[l] - l20[l] * l10[l]) / l11[l]);
-    let l22: Lanes = std::array::from_fn(|l| (s22[l] - l20[l] * l20[l] - l21[l] * l21[l]).sqrt());
-    let a: Lanes = std::array::from_fn(|l| 1.0 / l00[l]);
-    let b: Lanes = std::array::from_fn(|l| 1.0 / l11[l]);
-    let c: Lanes = std::array::from_fn(|l| 1.0 / l22[l]);
-    let m10: Lanes = std::array::from_fn(|l| -l10[l] * a[l] * b[l]);
-    let m21: Lanes = std::array::from_fn(|l| -l21[l] * b[l] * c[l]);
-    let m20: Lanes = std::array::from_fn(|l| -(l20[l] * a[l] + l21[l] * m10[l]) * c[l]);
+    let ([a, m10, m20, b, m21, c], minors) = inverse_factor([s[0], s[1], s[2], s[4], s[5], s[8]]);
     let mut out = [a, m10, m20, ZERO, b, m21, ZERO, ZERO, c];
     for (l, ok) in ok.iter_mut().enumerate() {
-        if !*ok || !out.iter().all(|x| x[l].is_finite()) {
+        let definite = minors.iter().all(|m| m[l] > 0.0);
+        if !*ok || !definite || !out.iter().all(|x| x[l].is_finite()) {
             *ok = false;
             for (e, v) in out
                 .iter_mut()
