@@ -84,6 +84,23 @@ fn batched_members_match_the_members_stepped_alone_to_round_off() {
 }
 
 #[test]
+fn stiff_batched_members_match_the_members_stepped_alone_to_round_off() {
+    // Stiffer cables (EA 1e4 to 1e6 N, against 50 to 400 N above): more Newton iterations
+    // near the round-off floor, and more of the first steps fall back.
+    let text = hanging_cables(10).replace(
+        "stretch_stiffness = [50.0, 400.0]",
+        "stretch_stiffness = [1e4, 1e6]",
+    );
+    let (alone, _) = run(&text, 2, false, 1_000, 0.005);
+    let (batched, counts) = run(&text, 2, true, 1_000, 0.005);
+    println!("stiff cables: batched steps {counts:?}");
+    assert!(counts.iter().sum::<usize>() >= 9_000, "{counts:?}");
+    let gap = relative_gap(&batched, &alone);
+    println!("stiff hanging cables, 1 000 steps: relative gap {gap:e}");
+    assert!(gap < 1e-12, "{gap:e}");
+}
+
+#[test]
 fn batched_results_are_bit_identical_for_any_thread_count() {
     let text = hanging_cables(11);
     let one = run(&text, 1, true, 50, 0.005);
