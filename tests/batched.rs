@@ -63,6 +63,15 @@ fn relative_gap(a: &[f64], b: &[f64]) -> f64 {
     gap / scale
 }
 
+/// Steps `text`'s members `steps` times batched and alone (2 threads); the relative gap
+/// between the two final states and, per member, its batched steps.
+fn batched_against_alone(text: &str, steps: usize) -> (f64, Vec<usize>) {
+    let (alone, none) = run(text, 2, false, steps, 0.005);
+    let (batched, counts) = run(text, 2, true, steps, 0.005);
+    assert!(none.iter().all(|&c| c == 0));
+    (relative_gap(&batched, &alone), counts)
+}
+
 #[test]
 fn batched_members_match_the_members_stepped_alone_to_round_off() {
     // Seeds 2, 4, 9 and 15 once differed by up to 7e-12: a line search halving on the
@@ -70,14 +79,11 @@ fn batched_members_match_the_members_stepped_alone_to_round_off() {
     // `newton::converging`).
     for seed in [2, 4, 9, 11, 15] {
         let text = hanging_cables(10).replace("seed = 11", &format!("seed = {seed}"));
-        let (alone, none) = run(&text, 2, false, 1_000, 0.005);
-        let (batched, counts) = run(&text, 2, true, 1_000, 0.005);
-        assert!(none.iter().all(|&c| c == 0));
+        let (gap, counts) = batched_against_alone(&text, 1_000);
         // Every member is batched at nearly every step (the last two share a group of
         // two); the first few, compressed by the shaking (an indefinite Newton matrix) or
         // needing a shorter Newton step, fall back.
         assert!(counts.iter().all(|&c| c >= 990), "seed {seed}: {counts:?}");
-        let gap = relative_gap(&batched, &alone);
         println!("hanging cables, seed {seed}, 1 000 steps: relative gap {gap:e}");
         assert!(gap < 1e-12, "seed {seed}: {gap:e}");
     }
@@ -91,11 +97,8 @@ fn stiff_batched_members_match_the_members_stepped_alone_to_round_off() {
         "stretch_stiffness = [50.0, 400.0]",
         "stretch_stiffness = [1e4, 1e6]",
     );
-    let (alone, _) = run(&text, 2, false, 1_000, 0.005);
-    let (batched, counts) = run(&text, 2, true, 1_000, 0.005);
-    println!("stiff cables: batched steps {counts:?}");
+    let (gap, counts) = batched_against_alone(&text, 1_000);
     assert!(counts.iter().sum::<usize>() >= 9_000, "{counts:?}");
-    let gap = relative_gap(&batched, &alone);
     println!("stiff hanging cables, 1 000 steps: relative gap {gap:e}");
     assert!(gap < 1e-12, "{gap:e}");
 }
@@ -133,10 +136,8 @@ fn bending_cables(count: usize) -> String {
 #[test]
 fn members_with_bending_are_batched_and_match_the_members_stepped_alone() {
     let text = bending_cables(10);
-    let (alone, _) = run(&text, 2, false, 400, 0.005);
-    let (batched, counts) = run(&text, 2, true, 400, 0.005);
+    let (gap, counts) = batched_against_alone(&text, 400);
     assert!(counts.iter().all(|&c| c >= 390), "{counts:?}");
-    let gap = relative_gap(&batched, &alone);
     println!("cables with bending, 400 steps: relative gap {gap:e}");
     assert!(gap < 1e-12, "{gap:e}");
 }
