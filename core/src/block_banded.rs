@@ -392,11 +392,14 @@ impl BlockBanded {
             // The mass couples row `i` to the next `mw - 1` points (those that exist).
             let (near, rest) = row.split_at_mut(mw.min(n - i));
             for (b, &mik) in near.iter_mut().zip(mass) {
-                *b *= s;
+                // Scaled and added to in registers, stored once (adding to the stored
+                // diagonal would reload entries just stored, and wait on the store).
+                let mut x = *b * s;
                 let v = ci * mik;
-                b[(0, 0)] += v;
-                b[(1, 1)] += v;
-                b[(2, 2)] += v;
+                x[(0, 0)] += v;
+                x[(1, 1)] += v;
+                x[(2, 2)] += v;
+                *b = x;
             }
             rest.iter_mut().for_each(|b| *b *= s);
         }

@@ -177,14 +177,45 @@ pub(crate) fn inverse_cholesky(s: &Entries) -> Option<Entries> {
     (definite && inverse.iter().all(|x| x.is_finite())).then_some(inverse)
 }
 
-/// `s −= aᵀ b` for 3×3 blocks: each entry of the product a dot product of two columns,
-/// \((a_0 b_0 + a_1 b_1) + a_2 b_2\), then subtracted (nalgebra's order).
+/// `s − (a₀b₀ + a₁b₁ + a₂b₂)`: with `FUSED` three fused multiply-subtracts (one
+/// instruction each on processors with FMA), else as written (nalgebra's order,
+/// \((a_0 b_0 + a_1 b_1) + a_2 b_2\), then subtracted).
 #[inline(always)]
-fn sub_transposed_times(s: &mut Entries, a: &Entries, b: &Entries) {
+fn sub_dot<const FUSED: bool>(s: Real, a: [Real; 3], b: [Real; 3]) -> Real {
+    if FUSED {
+        (-a[2]).mul_add(b[2], (-a[1]).mul_add(b[1], (-a[0]).mul_add(b[0], s)))
+    } else {
+        s - (a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    }
+}
+
+/// `a₀b₀ + … + a_k b_k` for the first `k + 1 ≤ 3` terms (fused with `FUSED`).
+#[inline(always)]
+fn dot<const FUSED: bool>(a: [Real; 3], b: [Real; 3], terms: usize) -> Real {
+    let mut sum = a[0] * b[0];
+    for t in 1..terms {
+        sum = if FUSED {
+            a[t].mul_add(b[t], sum)
+        } else {
+            sum + a[t] * b[t]
+        };
+    }
+    sum
+}
+
+/// Column `c` of a column-major 3×3 block.
+#[inline(always)]
+fn column(m: &Entries, c: usize) -> [Real; 3] {
+    [m[3 * c], m[3 * c + 1], m[3 * c + 2]]
+}
+
+/// `s −= aᵀ b` for 3×3 blocks: each entry of the product a dot product of two columns
+/// ([`sub_dot`]).
+#[inline(always)]
+fn sub_transposed_times<const FUSED: bool>(s: &mut Entries, a: &Entries, b: &Entries) {
     for c in 0..3 {
         for r in 0..3 {
-            let p = a[3 * r] * b[3 * c] + a[3 * r + 1] * b[3 * c + 1] + a[3 * r + 2] * b[3 * c + 2];
-            s[3 * c + r] -= p;
+            s[3 * c + r] = sub_dot::<FUSED>(s[3 * c + r], column(a, r), column(b, c));
         }
     }
 }
@@ -192,25 +223,24 @@ fn sub_transposed_times(s: &mut Entries, a: &Entries, b: &Entries) {
 /// The lower entries (`r ≥ c`) of `s −= aᵀ a`, in the order of [`sub_transposed_times`]:
 /// the diagonal block's update is symmetric, and [`inverse_cholesky`] reads only them.
 #[inline(always)]
-fn sub_gram_lower(s: &mut Entries, a: &Entries) {
+fn sub_gram_lower<const FUSED: bool>(s: &mut Entries, a: &Entries) {
     for c in 0..3 {
         for r in c..3 {
-            let p = a[3 * r] * a[3 * c] + a[3 * r + 1] * a[3 * c + 1] + a[3 * r + 2] * a[3 * c + 2];
-            s[3 * c + r] -= p;
+            s[3 * c + r] = sub_dot::<FUSED>(s[3 * c + r], column(a, r), column(a, c));
         }
     }
 }
 
-/// `l m` for a lower triangular `l`: [`times`] without its products by `l`'s zeros, the
-/// other terms in the same order (row `r` sums \(l_{rt} m_{tc}\) for `t ≤ r`).
+/// `l m` for a lower triangular `l`: without the products by `l`'s zeros, the other
+/// terms in nalgebra's order (row `r` sums \(l_{rt} m_{tc}\) for `t ≤ r`).
 #[inline(always)]
-fn lower_times(l: &Entries, m: &Entries) -> Entries {
+fn lower_times<const FUSED: bool>(l: &Entries, m: &Entries) -> Entries {
     let mut out = [0.0; 9];
     for c in 0..3 {
-        let (m0, m1, m2) = (m[3 * c], m[3 * c + 1], m[3 * c + 2]);
-        out[3 * c] = l[0] * m0;
-        out[3 * c + 1] = l[1] * m0 + l[4] * m1;
-        out[3 * c + 2] = l[2] * m0 + l[5] * m1 + l[8] * m2;
+        let mc = column(m, c);
+        for r in 0..3 {
+            out[3 * c + r] = dot::<FUSED>([l[r], l[3 + r], l[6 + r]], mc, r + 1);
+        }
     }
     out
 }
@@ -248,8 +278,35 @@ impl BandedCholesky {
 /// Factorises a band in place: on entry `u[i·(bw+1) + k]` holds \\(A_{i,i+k}\\) (the
 /// layout of [`BlockBanded`]'s band), on exit \\(U_{i,i+k}\\), with the diagonal slots
 /// holding \\(U_{ii}^{-T}\\). Each block of `A` is read before its slot is written, and
-/// only rows already final are read besides.
+/// only rows already final are read besides. On processors with AVX2 and FMA the
+/// products are fused (one rounding each; the same algorithm).
 pub(crate) fn factor_blocks(
+    u: &mut [Matrix3<Real>],
+    n: usize,
+    bw: usize,
+) -> Result<(), IntegratorError> {
+    #[cfg(target_arch = "x86_64")]
+    if splinerod_core::lanes::wide() {
+        // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+        return unsafe { factor_blocks_wide(u, n, bw) };
+    }
+    factor_blocks_with::<false>(u, n, bw)
+}
+
+/// [`factor_blocks_with`] fused, compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn factor_blocks_wide(
+    u: &mut [Matrix3<Real>],
+    n: usize,
+    bw: usize,
+) -> Result<(), IntegratorError> {
+    factor_blocks_with::<true>(u, n, bw)
+}
+
+/// [`factor_blocks`], its products fused with `FUSED`.
+#[inline(always)]
+fn factor_blocks_with<const FUSED: bool>(
     u: &mut [Matrix3<Real>],
     n: usize,
     bw: usize,
@@ -263,7 +320,7 @@ pub(crate) fn factor_blocks(
         // Diagonal block.
         let mut s = entries(&row[0]);
         for k in i.saturating_sub(bw)..i {
-            sub_gram_lower(&mut s, &entries(&done[k * w + (i - k)]));
+            sub_gram_lower::<FUSED>(&mut s, &entries(&done[k * w + (i - k)]));
         }
         let linv = inverse_cholesky(&s).ok_or_else(not_definite)?;
         row[0] = Matrix3::from_column_slice(&linv);
@@ -272,10 +329,10 @@ pub(crate) fn factor_blocks(
             let mut m = entries(&row[j - i]);
             for k in j.saturating_sub(bw)..i {
                 let a = entries(&done[k * w + (i - k)]);
-                sub_transposed_times(&mut m, &a, &entries(&done[k * w + (j - k)]));
+                sub_transposed_times::<FUSED>(&mut m, &a, &entries(&done[k * w + (j - k)]));
             }
             // U_ij = L⁻¹ m with L = U_iiᵀ lower triangular.
-            row[j - i] = Matrix3::from_column_slice(&lower_times(&linv, &m));
+            row[j - i] = Matrix3::from_column_slice(&lower_times::<FUSED>(&linv, &m));
         }
     }
     Ok(())
@@ -295,8 +352,27 @@ pub(crate) fn set3(x: &mut [Real], i: usize, v: Vector3<Real>) {
 
 /// Solves `A x = b` in place for one right-hand side with the factor of
 /// [`factor_blocks`]. The 3×3 products are written out on the column-major storage
-/// (measured: half the instructions of nalgebra's generic products here).
+/// (measured: half the instructions of nalgebra's generic products here), and fused on
+/// processors with AVX2 and FMA, as in [`factor_blocks`].
 pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
+    #[cfg(target_arch = "x86_64")]
+    if splinerod_core::lanes::wide() {
+        // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+        return unsafe { solve_blocks_wide(u, n, bw, x) };
+    }
+    solve_blocks_with::<false>(u, n, bw, x)
+}
+
+/// [`solve_blocks_with`] fused, compiled for AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn solve_blocks_wide(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
+    solve_blocks_with::<true>(u, n, bw, x)
+}
+
+/// [`solve_blocks`], its products fused with `FUSED`.
+#[inline(always)]
+fn solve_blocks_with<const FUSED: bool>(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
     let w = bw + 1;
     // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
     for i in 0..n {
@@ -304,9 +380,13 @@ pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Re
         let mut r = [rest[0], rest[1], rest[2]];
         let lo = i.saturating_sub(bw);
         for (k, y) in (lo..i).zip(done[3 * lo..].chunks_exact(3)) {
-            sub_transposed_product(&mut r, &u[k * w + (i - k)], y);
+            let m = entries(&u[k * w + (i - k)]);
+            let y = [y[0], y[1], y[2]];
+            for (c, r) in r.iter_mut().enumerate() {
+                *r = sub_dot::<FUSED>(*r, column(&m, c), y);
+            }
         }
-        rest[..3].copy_from_slice(&lower_product(&u[i * w], &r));
+        rest[..3].copy_from_slice(&lower_product::<FUSED>(&entries(&u[i * w]), r));
     }
     // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
     for i in (0..n).rev() {
@@ -315,69 +395,31 @@ pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Re
         let mut r = [own[0], own[1], own[2]];
         let row = &u[i * w + 1..(i * w + w).min(u.len())];
         for (block, xj) in row.iter().zip(later[..3 * (n - i - 1)].chunks_exact(3)) {
-            sub_product(&mut r, block, xj);
+            let m = entries(block);
+            let xj = [xj[0], xj[1], xj[2]];
+            for (c, r) in r.iter_mut().enumerate() {
+                *r = sub_dot::<FUSED>(*r, [m[c], m[3 + c], m[6 + c]], xj);
+            }
         }
-        own.copy_from_slice(&lower_transposed_product(&u[i * w], &r));
+        own.copy_from_slice(&lower_transposed_product::<FUSED>(&entries(&u[i * w]), r));
     }
 }
 
-/// `m v` on the column-major entries.
+/// `l v` for a lower triangular `l`: row `r` sums \(l_{rt} v_t\) for `t ≤ r` (no products
+/// by zeros), fused with `FUSED`.
 #[inline(always)]
-fn product(m: &Matrix3<Real>, v: &[Real]) -> [Real; 3] {
-    let s = m.as_slice();
-    [
-        s[0] * v[0] + s[3] * v[1] + s[6] * v[2],
-        s[1] * v[0] + s[4] * v[1] + s[7] * v[2],
-        s[2] * v[0] + s[5] * v[1] + s[8] * v[2],
-    ]
+fn lower_product<const FUSED: bool>(l: &Entries, v: [Real; 3]) -> [Real; 3] {
+    std::array::from_fn(|r| dot::<FUSED>([l[r], l[3 + r], l[6 + r]], v, r + 1))
 }
 
-/// `l v` for a lower triangular `l`: [`product`] without the products by zeros.
+/// `lᵀ v` for a lower triangular `l`: row `c` sums \(l_{tc} v_t\) for `t ≥ c`, fused
+/// with `FUSED`.
 #[inline(always)]
-fn lower_product(l: &Matrix3<Real>, v: &[Real]) -> [Real; 3] {
-    let s = l.as_slice();
-    [
-        s[0] * v[0],
-        s[1] * v[0] + s[4] * v[1],
-        s[2] * v[0] + s[5] * v[1] + s[8] * v[2],
-    ]
-}
-
-/// `lᵀ v` for a lower triangular `l`: [`transposed_product`] without the products by
-/// zeros.
-#[inline(always)]
-fn lower_transposed_product(l: &Matrix3<Real>, v: &[Real]) -> [Real; 3] {
-    let s = l.as_slice();
-    [
-        s[0] * v[0] + s[1] * v[1] + s[2] * v[2],
-        s[4] * v[1] + s[5] * v[2],
-        s[8] * v[2],
-    ]
-}
-
-/// `mᵀ v` on the column-major entries.
-#[inline(always)]
-fn transposed_product(m: &Matrix3<Real>, v: &[Real]) -> [Real; 3] {
-    let s = m.as_slice();
-    [
-        s[0] * v[0] + s[1] * v[1] + s[2] * v[2],
-        s[3] * v[0] + s[4] * v[1] + s[5] * v[2],
-        s[6] * v[0] + s[7] * v[1] + s[8] * v[2],
-    ]
-}
-
-/// `r −= m v`.
-#[inline(always)]
-fn sub_product(r: &mut [Real; 3], m: &Matrix3<Real>, v: &[Real]) {
-    let p = product(m, v);
-    r.iter_mut().zip(p).for_each(|(r, p)| *r -= p);
-}
-
-/// `r −= mᵀ v`.
-#[inline(always)]
-fn sub_transposed_product(r: &mut [Real; 3], m: &Matrix3<Real>, v: &[Real]) {
-    let p = transposed_product(m, v);
-    r.iter_mut().zip(p).for_each(|(r, p)| *r -= p);
+fn lower_transposed_product<const FUSED: bool>(l: &Entries, v: [Real; 3]) -> [Real; 3] {
+    std::array::from_fn(|c| {
+        let from_c = |x: [Real; 3]| std::array::from_fn(|t| x[(c + t).min(2)]);
+        dot::<FUSED>(from_c(column(l, c)), from_c(v), 3 - c)
+    })
 }
 
 #[cfg(test)]
@@ -395,22 +437,26 @@ mod tests {
         for k in 0..200 {
             let (a, b, s) = (block(3 * k), block(3 * k + 1), block(3 * k + 2));
             let mut ours = entries(&s);
-            sub_transposed_times(&mut ours, &entries(&a), &entries(&b));
+            sub_transposed_times::<false>(&mut ours, &entries(&a), &entries(&b));
             assert_eq!(bits(&ours), bits((s - a.tr_mul(&b)).as_slice()));
             let mut gram = entries(&s);
-            sub_gram_lower(&mut gram, &entries(&a));
+            sub_gram_lower::<false>(&mut gram, &entries(&a));
             let full = s - a.tr_mul(&a);
             for (c, r) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)] {
                 assert_eq!(gram[3 * c + r].to_bits(), full[(r, c)].to_bits());
             }
             // Lower triangular factors: the same values (a zero's sign aside).
             let l = a.lower_triangle();
-            assert_eq!(lower_times(&entries(&l), &entries(&b)), entries(&(l * b)));
+            assert_eq!(
+                lower_times::<false>(&entries(&l), &entries(&b)),
+                entries(&(l * b))
+            );
             let v = b.column(0);
             let (lv, ltv) = (l * v, l.tr_mul(&v));
-            assert_eq!(lower_product(&l, v.as_slice()), [lv.x, lv.y, lv.z]);
+            let (le, v) = (entries(&l), [v.x, v.y, v.z]);
+            assert_eq!(lower_product::<false>(&le, v), [lv.x, lv.y, lv.z]);
             assert_eq!(
-                lower_transposed_product(&l, v.as_slice()),
+                lower_transposed_product::<false>(&le, v),
                 [ltv.x, ltv.y, ltv.z]
             );
         }
@@ -472,6 +518,79 @@ mod tests {
                     "p {p} block {k}: {ours:e} against {theirs:e}"
                 );
             }
+        }
+    }
+
+    /// An SPD band of `n` blocks and bandwidth `bw`: `Bᵀ B + I` for a random band `B`,
+    /// stored as the upper band (the layout [`factor_blocks`] takes).
+    fn spd_band(n: usize, bw: usize) -> Vec<Matrix3<Real>> {
+        let w = bw + 1;
+        let mut full = nalgebra::DMatrix::<Real>::identity(3 * n, 3 * n);
+        let b = nalgebra::DMatrix::from_fn(3 * n, 3 * n, |r, c| {
+            let near = (r / 3).abs_diff(c / 3) <= bw / 2;
+            if near {
+                ((r * 31 + c * 17) as Real * 0.37).sin()
+            } else {
+                0.0
+            }
+        });
+        full += b.transpose() * b;
+        let mut u = vec![Matrix3::zeros(); n * w];
+        for i in 0..n {
+            for k in 0..w.min(n - i) {
+                u[i * w + k] = full.fixed_view::<3, 3>(3 * i, 3 * (i + k)).into();
+            }
+        }
+        u
+    }
+
+    #[test]
+    fn the_fused_and_the_plain_kernels_solve_alike_to_round_off() {
+        let (n, bw) = (23, 5);
+        let a = spd_band(n, bw);
+        let rhs: Vec<Real> = (0..3 * n).map(|k| (k as Real * 0.71).cos()).collect();
+        let solve = |fused: bool| {
+            let (mut u, mut x) = (a.clone(), rhs.clone());
+            if fused {
+                // SAFETY: only called where the processor has AVX2 and FMA.
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    factor_blocks_wide(&mut u, n, bw).expect("definite");
+                    solve_blocks_wide(&u, n, bw, &mut x);
+                }
+            } else {
+                factor_blocks_with::<false>(&mut u, n, bw).expect("definite");
+                solve_blocks_with::<false>(&u, n, bw, &mut x);
+            }
+            x
+        };
+        let plain = solve(false);
+        // A x = b, through the band (upper blocks and their transposes).
+        let w = bw + 1;
+        let mut residual = rhs.clone();
+        for i in 0..n {
+            for k in 0..w.min(n - i) {
+                let block = a[i * w + k];
+                let (xi, xj) = (get3(&plain, i), get3(&plain, i + k));
+                let ri = get3(&residual, i) - block * xj;
+                set3(&mut residual, i, ri);
+                if k > 0 {
+                    let rj = get3(&residual, i + k) - block.tr_mul(&xi);
+                    set3(&mut residual, i + k, rj);
+                }
+            }
+        }
+        let scale = plain.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
+        assert!(residual.iter().all(|r| r.abs() <= 1e-12 * scale.max(1.0)));
+        #[cfg(target_arch = "x86_64")]
+        if splinerod_core::lanes::wide() {
+            let fused = solve(true);
+            let gap = plain
+                .iter()
+                .zip(&fused)
+                .fold(0.0, |m: Real, (p, f)| m.max((p - f).abs()));
+            assert!(gap <= 1e-12 * scale, "gap {gap:e}");
+            assert_ne!(plain, fused, "the fused kernels round differently");
         }
     }
 

@@ -114,11 +114,15 @@ impl PointPins {
                     f.block = q * f.block;
                 }
             }
+            // A point held in every direction (q = 0, the usual pin): its column is
+            // the identity's, without the products by zero.
+            let held = q == Matrix3::zeros();
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
-                let value = if j == k {
-                    q * a.block(k, k) * q + p
-                } else {
-                    a.block(j, k) * q
+                let value = match (j == k, held) {
+                    (true, true) => *p,
+                    (false, true) => Matrix3::zeros(),
+                    (true, false) => q * a.block(k, k) * q + p,
+                    (false, false) => a.block(j, k) * q,
                 };
                 a.set_block(j, k, &value);
             }

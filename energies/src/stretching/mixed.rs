@@ -99,7 +99,7 @@
 //! below the pointwise energy (`tests/consistent_gram.rs`).
 
 use super::seam;
-use super::table::{Moment, MAX_WIDTH};
+use super::table::{add_times, Moment, MAX_WIDTH};
 use super::{tangent, Stretching};
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::bspline::bspline_values;
@@ -372,6 +372,11 @@ impl Stretching {
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if self.lumped_open(rod) && splinerod_core::lanes::wide() {
+            // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+            return unsafe { self.lumped_derivatives_wide(rod, kind, gradient, hessian) };
+        }
         let merged = self.merged_weights(rod);
         let mut heads = rod.is_closed().then(seam::Heads::default);
         self.with_consistent_tensions(rod, |t| {
@@ -381,7 +386,7 @@ impl Stretching {
                 if let Some(g) = gradient.as_deref_mut() {
                     add_scaled(g, k.first, k.db, tension);
                 }
-                add_function_blocks(hessian, k, c, geometric_tension(kind, tension));
+                add_function_blocks::<false>(hessian, k, c, geometric_tension(kind, tension));
                 if let Some(heads) = heads.as_mut() {
                     match seam::partner(rod, k.index) {
                         Some(tail) if tail > k.index => heads.keep(k.index, k.first, k.db),
@@ -393,6 +398,74 @@ impl Stretching {
                 }
             });
         });
+    }
+
+    /// Whether `rod` takes the lumped form's tabulated derivatives on an open rod: the
+    /// energy's own table matches it, and no tension solve or seam is involved.
+    #[inline]
+    fn lumped_open(&self, rod: &Rod) -> bool {
+        !self.consistent() && !rod.is_closed() && self.table.matches(rod)
+    }
+
+    /// [`Self::lumped_derivatives`] with fused products, compiled for AVX2 and FMA (the
+    /// same sums as [`Self::tabulated_derivatives`], each product rounded once).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn lumped_derivatives_wide(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        gradient: Option<&mut [Vector3<Real>]>,
+        hessian: &mut BlockBanded,
+    ) {
+        self.lumped_derivatives::<true>(rod, kind, gradient, hessian);
+    }
+
+    /// [`Self::tabulated_derivatives`] where [`Self::lumped_open`] holds: per function
+    /// its tension \\(\\hat\\lambda_k + EA\\, b_k/m_k\\) from its own moment, one pass.
+    /// Plain loops and `#[inline(always)]` callees only, so that all of it is compiled
+    /// for the caller's instruction set (fused multiply-add where `FUSED`).
+    #[inline(always)]
+    fn lumped_derivatives<const FUSED: bool>(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        mut gradient: Option<&mut [Vector3<Real>]>,
+        hessian: &mut BlockBanded,
+    ) {
+        let mut scratch = [[Vector3::zeros(); MAX_WIDTH]; 2];
+        for j in 0..self.table.functions() {
+            let g = gradient.as_deref_mut();
+            match self.table.width(j) {
+                // A cubic's interior functions touch 6 points: with the width a
+                // constant, every loop of their sums unrolls.
+                6 => self.lumped_function::<FUSED, 6>(rod, kind, j, &mut scratch, (g, hessian)),
+                _ => self.lumped_function::<FUSED, 0>(rod, kind, j, &mut scratch, (g, hessian)),
+            }
+        }
+    }
+
+    /// [`Self::lumped_derivatives`]' terms of function `j + 1`, whose width is `W` (if
+    /// not 0; else the table's), added to the gradient (if any) and the Hessian.
+    #[inline(always)]
+    fn lumped_function<const FUSED: bool, const W: usize>(
+        &self,
+        rod: &Rod,
+        kind: HessianKind,
+        j: usize,
+        scratch: &mut [[Vector3<Real>; MAX_WIDTH]; 2],
+        (gradient, hessian): (Option<&mut [Vector3<Real>]>, &mut BlockBanded),
+    ) {
+        let width = if W > 0 { W } else { self.table.width(j) };
+        let k = self.table.moment_at::<FUSED>(rod, (j, width), scratch);
+        let c = self.lumped_stiffness(k.m);
+        let tension = self.tension_of(None, k.index, k.b, k.m);
+        if let Some(g) = gradient {
+            for (g, v) in g[k.first..].iter_mut().zip(k.db) {
+                add_times::<FUSED>(g, v, tension);
+            }
+        }
+        add_function_blocks::<FUSED>(hessian, &k, c, geometric_tension(kind, tension));
     }
 
     /// The geometric term \\(\\int T g_0^{-1/2} b_a' b_c'\\, ds\\; I\\) of knot span `span`,
@@ -468,8 +541,14 @@ fn add_scaled(gradient: &mut [Vector3<Real>], first: usize, db: &[Vector3<Real>]
 /// `a ≤ b`, in one pass over its blocks of the band (the same sums, in the same order,
 /// as [`add_outer_products`] then [`add_scaled_identities`], which take a band too
 /// narrow for it).
-#[inline]
-fn add_function_blocks(hessian: &mut BlockBanded, k: &Moment<'_>, c: Real, lambda: Real) {
+/// With `FUSED` the rank-one products are fused (see [`super::table::add_scaled`]).
+#[inline(always)]
+fn add_function_blocks<const FUSED: bool>(
+    hessian: &mut BlockBanded,
+    k: &Moment<'_>,
+    c: Real,
+    lambda: Real,
+) {
     let v = k.db;
     if v.len() > hessian.bandwidth() + 1 {
         add_outer_products(hessian, k.first, c, v);
@@ -481,12 +560,16 @@ fn add_function_blocks(hessian: &mut BlockBanded, k: &Moment<'_>, c: Real, lambd
         let g = &k.g[k.rows[a]..];
         let row = hessian.band_row_mut(k.first + a);
         for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
-            add_rank_one(block, &u, vb);
+            // The block summed in registers and stored once (adding `d` to the stored
+            // diagonal would reload entries just stored, and wait on the store).
+            let mut sum = *block;
+            add_rank_one::<FUSED>(&mut sum, &u, vb);
             let d = lambda * gab;
-            let e = block.as_mut_slice();
+            let e = sum.as_mut_slice();
             e[0] += d;
             e[4] += d;
             e[8] += d;
+            *block = sum;
         }
     }
 }
@@ -526,7 +609,7 @@ fn add_outer_products(hessian: &mut BlockBanded, first: usize, c: Real, v: &[Vec
             let u = va * c;
             let row = hessian.band_row_mut(first + a);
             for (block, vb) in row.iter_mut().zip(&v[a..]) {
-                add_rank_one(block, &u, vb);
+                add_rank_one::<false>(block, &u, vb);
             }
         }
     } else {
@@ -540,14 +623,23 @@ fn add_outer_products(hessian: &mut BlockBanded, first: usize, c: Real, v: &[Vec
 }
 
 /// `block += u vᵀ`, written out (the compiler keeps it in registers; a temporary 3×3
-/// product through nalgebra's operators was measured 2–3 times slower here).
+/// product through nalgebra's operators was measured 2–3 times slower here), each
+/// product fused with `FUSED`.
 #[inline(always)]
-fn add_rank_one(block: &mut Matrix3<Real>, u: &Vector3<Real>, v: &Vector3<Real>) {
+fn add_rank_one<const FUSED: bool>(
+    block: &mut Matrix3<Real>,
+    u: &Vector3<Real>,
+    v: &Vector3<Real>,
+) {
     // Column-major: entry (r, c) at 3c + r.
     let e = block.as_mut_slice();
     for (column, &vc) in e.chunks_exact_mut(3).zip(v.iter()) {
         for (x, &ur) in column.iter_mut().zip(u.iter()) {
-            *x += ur * vc;
+            *x = if FUSED {
+                ur.mul_add(vc, *x)
+            } else {
+                *x + ur * vc
+            };
         }
     }
 }

@@ -204,35 +204,59 @@ impl TensionTable {
     /// Calls `f` with every tension function's [`Moment`] at the rod's positions, in
     /// increasing order (functions with an empty support have width 0). No allocation.
     pub fn for_each(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {
-        let mut db = [Vector3::zeros(); MAX_WIDTH];
-        let mut r = [Vector3::zeros(); MAX_WIDTH];
-        let blocks = self.first.iter().zip(&self.width).zip(&self.m);
-        for (j, ((&first, &width), &m)) in blocks.enumerate() {
-            let g = &self.g[j * self.stride..(j + 1) * self.stride];
-            let q = &rod.positions[first..first + width];
-            moment_derivatives(q, g, &self.rows, &mut r, &mut db);
-            let quad: Real = r[..width]
-                .iter()
-                .zip(&db[..width])
-                .map(|(r, d)| r.dot(d))
-                .sum();
-            f(&Moment {
-                index: j + 1,
-                first,
-                b: 0.5 * (quad - m),
-                m,
-                db: &db[..width],
-                g,
-                rows: &self.rows,
-            });
+        let mut scratch = [[Vector3::zeros(); MAX_WIDTH]; 2];
+        for (j, &width) in self.width.iter().enumerate() {
+            f(&self.moment_at::<false>(rod, (j, width), &mut scratch));
+        }
+    }
+
+    /// Control points function `j + 1` touches.
+    #[inline(always)]
+    pub fn width(&self, j: usize) -> usize {
+        self.width[j]
+    }
+
+    /// The [`Moment`] of function `j + 1`, which touches `width` points (its
+    /// [`Self::width`]; a caller passing a constant lets every loop unroll), with
+    /// `scratch` room for `q − q₀` and the derivatives; the products of `G_k q` fused
+    /// with `FUSED` (for callers compiled with fused multiply-add, where `f64::mul_add`
+    /// is one instruction).
+    #[inline(always)]
+    pub fn moment_at<'a, const FUSED: bool>(
+        &'a self,
+        rod: &Rod,
+        (j, width): (usize, usize),
+        [r, db]: &'a mut [[Vector3<Real>; MAX_WIDTH]; 2],
+    ) -> Moment<'a> {
+        let first = self.first[j];
+        let g = &self.g[j * self.stride..(j + 1) * self.stride];
+        let q = &rod.positions[first..first + width];
+        moment_derivatives::<FUSED>(q, g, &self.rows, r, db);
+        let quad: Real = r[..width]
+            .iter()
+            .zip(&db[..width])
+            .map(|(r, d)| dot::<FUSED>(r, d))
+            .sum();
+        let m = self.m[j];
+        Moment {
+            index: j + 1,
+            first,
+            b: 0.5 * (quad - m),
+            m,
+            db: &db[..width],
+            g,
+            rows: &self.rows,
         }
     }
 }
 
 /// `r = q − q₀` and `db = G r` for one function's block `G` (packed rows `rows`) and
-/// positions `q` (`q.len() ≤ r.len()`; the rest of `r` and `db` is left as it was).
+/// positions `q` (`q.len() ≤ r.len()`; the rest of `r` and `db` is left as it was),
+/// each product fused with `FUSED`. Each `db_b = Σ_a G_ab r_a` is summed in registers
+/// and stored once (a sum scattered into `db` row by row would reload every entry it
+/// had just stored, and wait on it).
 #[inline(always)]
-fn moment_derivatives(
+fn moment_derivatives<const FUSED: bool>(
     q: &[Vector3<Real>],
     g: &[Real],
     rows: &[usize],
@@ -244,15 +268,31 @@ fn moment_derivatives(
     for (r, q) in r.iter_mut().zip(q) {
         *r = q - origin;
     }
-    db[..width].iter_mut().for_each(|v| *v = Vector3::zeros());
-    for a in 0..width {
-        let row = &g[rows[a]..];
-        let mut sum = r[a] * row[0];
-        for b in a + 1..width {
-            let gab = row[b - a];
-            sum += r[b] * gab;
-            db[b] += r[a] * gab;
+    for b in 0..width {
+        let mut sum = Vector3::zeros();
+        for (a, r) in r[..width].iter().enumerate() {
+            // G is symmetric: entry (a, b) is stored at its upper place.
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            add_times::<FUSED>(&mut sum, r, g[rows[lo] + hi - lo]);
         }
-        db[a] += sum;
+        db[b] = sum;
+    }
+}
+
+/// `acc += v · s`, each coordinate fused with `FUSED`.
+#[inline(always)]
+pub(super) fn add_times<const FUSED: bool>(acc: &mut Vector3<Real>, v: &Vector3<Real>, s: Real) {
+    for (a, &x) in acc.iter_mut().zip(v.iter()) {
+        *a = if FUSED { x.mul_add(s, *a) } else { *a + x * s };
+    }
+}
+
+/// `a · b` (nalgebra's order, \((a_0 b_0 + a_1 b_1) + a_2 b_2\)), fused with `FUSED`.
+#[inline(always)]
+fn dot<const FUSED: bool>(a: &Vector3<Real>, b: &Vector3<Real>) -> Real {
+    if FUSED {
+        a.z.mul_add(b.z, a.y.mul_add(b.y, a.x * b.x))
+    } else {
+        a.dot(b)
     }
 }
