@@ -163,9 +163,22 @@ fn sub_mul<const FUSED: bool>(mut acc: Lanes, a: Lanes, b: Lanes) -> Lanes {
 /// `m v` (or `mᵀ v` with `transposed`), lane by lane.
 #[inline(always)]
 fn product<const FUSED: bool>(m: &Block, v: &[Lanes; 3], transposed: bool) -> [Lanes; 3] {
-    let mut out = [ZERO; 3];
-    sub_product::<FUSED>(&mut out, m, v, transposed);
-    out.map(|row| row.map(|x| -x))
+    // The sums of `sub_product` from zero, negated: the same roundings (rounding to
+    // nearest is symmetric), without a pass to negate them.
+    std::array::from_fn(|row| {
+        let e = |col: usize| {
+            if transposed {
+                m[3 * row + col]
+            } else {
+                m[3 * col + row]
+            }
+        };
+        let mut acc = splinerod_core::lanes::mul(e(0), v[0]);
+        for (col, vc) in v.iter().enumerate().skip(1) {
+            splinerod_core::lanes::fma::<FUSED>(&mut acc, e(col), *vc);
+        }
+        acc
+    })
 }
 
 /// `r −= m v` (or `mᵀ v` with `transposed`), lane by lane.

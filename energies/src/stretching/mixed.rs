@@ -98,10 +98,10 @@
 //! \\(\\tfrac{EA}{2}\\lVert\\varepsilon - \\Pi\\varepsilon\\rVert^2\\) before it, and it stays
 //! below the pointwise energy (`tests/consistent_gram.rs`).
 
-use super::seam;
-use super::table::{add_times, Moment, MAX_WIDTH};
+use super::table::MAX_WIDTH;
+use super::tabulated::{add_outer_products, add_scaled, geometric_tension};
 use super::{tangent, Stretching};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use splinerod_core::bspline::bspline_values;
 use splinerod_core::{BasisValues, BlockBanded, HessianKind, Real, Rod, MAX_DEGREE};
 use std::cell::RefCell;
@@ -286,7 +286,7 @@ impl Stretching {
     /// [`Self::with_tensions`] for the consistent form (whose tensions need a solve over
     /// the whole rod first); `None` for the lumped one, whose tension function `j` has
     /// its tension from its own moment ([`Self::tension_of`]): one pass instead of two.
-    fn with_consistent_tensions<R>(
+    pub(super) fn with_consistent_tensions<R>(
         &self,
         rod: &Rod,
         f: impl FnOnce(Option<&[(Real, Real)]>) -> R,
@@ -303,7 +303,7 @@ impl Stretching {
     /// from `tensions` if given (the consistent form), else
     /// \\(\\hat\\lambda + EA\\, b/m\\).
     #[inline]
-    fn tension_of(
+    pub(super) fn tension_of(
         &self,
         tensions: Option<&[(Real, Real)]>,
         index: usize,
@@ -319,7 +319,7 @@ impl Stretching {
     /// The lumped material stiffness `EA/m` of a tension function of weight `m` (0 for
     /// an empty support): the banded part of its Hessian ([`super::tensions`]).
     #[inline]
-    fn lumped_stiffness(&self, m: Real) -> Real {
+    pub(super) fn lumped_stiffness(&self, m: Real) -> Real {
         if m > 0.0 {
             self.axial_stiffness() / m
         } else {
@@ -360,112 +360,6 @@ impl Stretching {
                 }
             });
         });
-    }
-
-    /// [`Self::mixed_hessian`] from the tabulated integrals ([`super::table`]): per tension
-    /// function, the material term \\(\\tfrac{EA}{m_k} \\partial b_k \\partial b_k^T\\), the
-    /// geometric term \\(\\lambda_k G_k \\otimes I\\) and the gradient \\(\\lambda_k \\partial b_k\\).
-    fn tabulated_derivatives(
-        &self,
-        rod: &Rod,
-        kind: HessianKind,
-        mut gradient: Option<&mut [Vector3<Real>]>,
-        hessian: &mut BlockBanded,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if self.lumped_open(rod) && splinerod_core::lanes::wide() {
-            // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-            return unsafe { self.lumped_derivatives_wide(rod, kind, gradient, hessian) };
-        }
-        let merged = self.merged_weights(rod);
-        let mut heads = rod.is_closed().then(seam::Heads::default);
-        self.with_consistent_tensions(rod, |t| {
-            self.for_each_moment(rod, |k| {
-                let c = self.lumped_stiffness(merged.get(k.index).map_or(k.m, |p| p.1));
-                let tension = self.tension_of(t, k.index, k.b, k.m);
-                if let Some(g) = gradient.as_deref_mut() {
-                    add_scaled(g, k.first, k.db, tension);
-                }
-                add_function_blocks::<false>(hessian, k, c, geometric_tension(kind, tension));
-                if let Some(heads) = heads.as_mut() {
-                    match seam::partner(rod, k.index) {
-                        Some(tail) if tail > k.index => heads.keep(k.index, k.first, k.db),
-                        Some(head) => {
-                            seam::add_cross_term(hessian, c, heads.get(head), (k.first, k.db))
-                        }
-                        None => {}
-                    }
-                }
-            });
-        });
-    }
-
-    /// Whether `rod` takes the lumped form's tabulated derivatives on an open rod: the
-    /// energy's own table matches it, and no tension solve or seam is involved.
-    #[inline]
-    fn lumped_open(&self, rod: &Rod) -> bool {
-        !self.consistent() && !rod.is_closed() && self.table.matches(rod)
-    }
-
-    /// [`Self::lumped_derivatives`] with fused products, compiled for AVX2 and FMA (the
-    /// same sums as [`Self::tabulated_derivatives`], each product rounded once).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn lumped_derivatives_wide(
-        &self,
-        rod: &Rod,
-        kind: HessianKind,
-        gradient: Option<&mut [Vector3<Real>]>,
-        hessian: &mut BlockBanded,
-    ) {
-        self.lumped_derivatives::<true>(rod, kind, gradient, hessian);
-    }
-
-    /// [`Self::tabulated_derivatives`] where [`Self::lumped_open`] holds: per function
-    /// its tension \\(\\hat\\lambda_k + EA\\, b_k/m_k\\) from its own moment, one pass.
-    /// Plain loops and `#[inline(always)]` callees only, so that all of it is compiled
-    /// for the caller's instruction set (fused multiply-add where `FUSED`).
-    #[inline(always)]
-    fn lumped_derivatives<const FUSED: bool>(
-        &self,
-        rod: &Rod,
-        kind: HessianKind,
-        mut gradient: Option<&mut [Vector3<Real>]>,
-        hessian: &mut BlockBanded,
-    ) {
-        let mut scratch = [[Vector3::zeros(); MAX_WIDTH]; 2];
-        for j in 0..self.table.functions() {
-            let g = gradient.as_deref_mut();
-            match self.table.width(j) {
-                // A cubic's interior functions touch 6 points: with the width a
-                // constant, every loop of their sums unrolls.
-                6 => self.lumped_function::<FUSED, 6>(rod, kind, j, &mut scratch, (g, hessian)),
-                _ => self.lumped_function::<FUSED, 0>(rod, kind, j, &mut scratch, (g, hessian)),
-            }
-        }
-    }
-
-    /// [`Self::lumped_derivatives`]' terms of function `j + 1`, whose width is `W` (if
-    /// not 0; else the table's), added to the gradient (if any) and the Hessian.
-    #[inline(always)]
-    fn lumped_function<const FUSED: bool, const W: usize>(
-        &self,
-        rod: &Rod,
-        kind: HessianKind,
-        j: usize,
-        scratch: &mut [[Vector3<Real>; MAX_WIDTH]; 2],
-        (gradient, hessian): (Option<&mut [Vector3<Real>]>, &mut BlockBanded),
-    ) {
-        let width = if W > 0 { W } else { self.table.width(j) };
-        let k = self.table.moment_at::<FUSED>(rod, (j, width), scratch);
-        let c = self.lumped_stiffness(k.m);
-        let tension = self.tension_of(None, k.index, k.b, k.m);
-        if let Some(g) = gradient {
-            for (g, v) in g[k.first..].iter_mut().zip(k.db) {
-                add_times::<FUSED>(g, v, tension);
-            }
-        }
-        add_function_blocks::<FUSED>(hessian, &k, c, geometric_tension(kind, tension));
     }
 
     /// The geometric term \\(\\int T g_0^{-1/2} b_a' b_c'\\, ds\\; I\\) of knot span `span`,
@@ -518,132 +412,6 @@ impl Stretching {
     }
 }
 
-/// The tension the geometric stiffness uses: all of it for the exact Hessian, only
-/// its positive part for the definite one.
-#[inline]
-fn geometric_tension(kind: HessianKind, tension: Real) -> Real {
-    match kind {
-        HessianKind::Exact => tension,
-        _ => tension.max(0.0),
-    }
-}
-
-/// `gradient[first + a] += tension · db[a]`.
-#[inline]
-fn add_scaled(gradient: &mut [Vector3<Real>], first: usize, db: &[Vector3<Real>], tension: Real) {
-    for (g, v) in gradient[first..].iter_mut().zip(db) {
-        *g += v * tension;
-    }
-}
-
-/// Adds one tension function's material and geometric stiffness,
-/// \\(c\\, \\partial b_a \\partial b_b^T + \\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`,
-/// `a ≤ b`, in one pass over its blocks of the band (the same sums, in the same order,
-/// as [`add_outer_products`] then [`add_scaled_identities`], which take a band too
-/// narrow for it).
-/// With `FUSED` the rank-one products are fused (see [`super::table::add_scaled`]).
-#[inline(always)]
-fn add_function_blocks<const FUSED: bool>(
-    hessian: &mut BlockBanded,
-    k: &Moment<'_>,
-    c: Real,
-    lambda: Real,
-) {
-    let v = k.db;
-    if v.len() > hessian.bandwidth() + 1 {
-        add_outer_products(hessian, k.first, c, v);
-        add_scaled_identities(hessian, k, lambda);
-        return;
-    }
-    for (a, va) in v.iter().enumerate() {
-        let u = va * c;
-        let g = &k.g[k.rows[a]..];
-        let row = hessian.band_row_mut(k.first + a);
-        for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
-            // The block summed in registers and stored once (adding `d` to the stored
-            // diagonal would reload entries just stored, and wait on the store).
-            let mut sum = *block;
-            add_rank_one::<FUSED>(&mut sum, &u, vb);
-            let d = lambda * gab;
-            let e = sum.as_mut_slice();
-            e[0] += d;
-            e[4] += d;
-            e[8] += d;
-            *block = sum;
-        }
-    }
-}
-
-/// Adds \\(\\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`, `a ≤ b`, into the
-/// band (or block by block where it is narrower, see [`add_any`]).
-#[inline]
-fn add_scaled_identities(hessian: &mut BlockBanded, k: &Moment<'_>, lambda: Real) {
-    let width = k.db.len();
-    let wide = width <= hessian.bandwidth() + 1;
-    for a in 0..width {
-        if wide {
-            let row = hessian.band_row_mut(k.first + a);
-            for (b, block) in (a..width).zip(row.iter_mut()) {
-                let g = lambda * k.entry(a, b);
-                block[(0, 0)] += g;
-                block[(1, 1)] += g;
-                block[(2, 2)] += g;
-            }
-        } else {
-            for b in a..width {
-                let block = Matrix3::identity() * (lambda * k.entry(a, b));
-                add_any(hessian, k.first + a, k.first + b, &block);
-            }
-        }
-    }
-}
-
-/// Adds \\(c\\, v_a v_b^T\\) at blocks `(first + a, first + b)` for every pair `a ≤ b` of
-/// `v`: one tension function's material stiffness. Row by row into the band when it is
-/// wide enough (no per-block bounds check), else block by block (far blocks for a matrix
-/// sized narrower, see [`add_any`]).
-#[inline]
-fn add_outer_products(hessian: &mut BlockBanded, first: usize, c: Real, v: &[Vector3<Real>]) {
-    if v.len() <= hessian.bandwidth() + 1 {
-        for (a, va) in v.iter().enumerate() {
-            let u = va * c;
-            let row = hessian.band_row_mut(first + a);
-            for (block, vb) in row.iter_mut().zip(&v[a..]) {
-                add_rank_one::<false>(block, &u, vb);
-            }
-        }
-    } else {
-        for (a, va) in v.iter().enumerate() {
-            let u = va * c;
-            for (b, vb) in v.iter().enumerate().skip(a) {
-                add_any(hessian, first + a, first + b, &(u * vb.transpose()));
-            }
-        }
-    }
-}
-
-/// `block += u vᵀ`, written out (the compiler keeps it in registers; a temporary 3×3
-/// product through nalgebra's operators was measured 2–3 times slower here), each
-/// product fused with `FUSED`.
-#[inline(always)]
-fn add_rank_one<const FUSED: bool>(
-    block: &mut Matrix3<Real>,
-    u: &Vector3<Real>,
-    v: &Vector3<Real>,
-) {
-    // Column-major: entry (r, c) at 3c + r.
-    let e = block.as_mut_slice();
-    for (column, &vc) in e.chunks_exact_mut(3).zip(v.iter()) {
-        for (x, &ur) in column.iter_mut().zip(u.iter()) {
-            *x = if FUSED {
-                ur.mul_add(vc, *x)
-            } else {
-                *x + ur * vc
-            };
-        }
-    }
-}
-
 /// Adds one quadrature point's contribution, weighted by the tension function's value
 /// `phi` there, to that function's projection `pr`.
 #[inline]
@@ -667,16 +435,5 @@ fn accumulate(
     let f = c1 * (w / root);
     for (db, &da) in pr.db[offset..offset + order].iter_mut().zip(qp.d1) {
         *db += f * da;
-    }
-}
-
-/// Adds a block inside the band, or as a far block for a matrix sized with a narrower
-/// band than [`crate::Energy::bandwidth`] (a caller that sized it by the degree).
-#[inline]
-fn add_any(hessian: &mut BlockBanded, i: usize, j: usize, block: &Matrix3<Real>) {
-    if j - i <= hessian.bandwidth() {
-        hessian.add_block(i, j, block);
-    } else {
-        hessian.add_coupling(i, j, block);
     }
 }

@@ -36,6 +36,7 @@ mod multipliers;
 mod point_batch;
 mod seam;
 mod table;
+mod tabulated;
 mod tensions;
 
 pub(crate) use lanes::add_moment_lanes;
