@@ -162,7 +162,10 @@ fn fused_and_plain_solve(n: usize, bw: usize) {
     }
     let scale = plain.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
     let worst = residual.iter().fold(0.0, |m: Real, r| m.max(r.abs()));
-    assert!(worst <= 1e-12 * scale.max(1.0), "n {n}, bw {bw}: residual {worst:e}");
+    assert!(
+        worst <= 1e-12 * scale.max(1.0),
+        "n {n}, bw {bw}: residual {worst:e}"
+    );
     #[cfg(target_arch = "x86_64")]
     if splinerod_core::lanes::wide() {
         let fused = solve(true);
