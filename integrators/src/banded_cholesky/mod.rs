@@ -13,6 +13,8 @@
 //! [`crate::linear::LinearSolver`] sends those to the sparse path.
 
 mod kernels;
+#[cfg(target_arch = "x86_64")]
+mod rows;
 #[cfg(test)]
 mod tests;
 
@@ -118,13 +120,14 @@ pub(crate) fn factor_blocks(
     #[cfg(target_arch = "x86_64")]
     if splinerod_core::lanes::wide() {
         // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-        return unsafe { factor_blocks_wide(u, n, bw) };
+        return unsafe { rows::factor_rows(u, n, bw) };
     }
     factor_blocks_with::<false>(u, n, bw)
 }
 
-/// [`factor_blocks_with`] fused, compiled for AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
+/// [`factor_blocks_with`] fused, compiled for AVX2 and FMA: the column-form fused
+/// factor, which [`rows::factor_rows`] equals bit for bit (transposed; tested).
+#[cfg(all(test, target_arch = "x86_64"))]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn factor_blocks_wide(
     u: &mut [Matrix3<Real>],
@@ -181,28 +184,46 @@ pub(crate) fn set3(x: &mut [Real], i: usize, v: Vector3<Real>) {
 }
 
 /// Solves `A x = b` in place for one right-hand side with the factor of
-/// [`factor_blocks`]. The 3×3 products are written out on the column-major storage
+/// [`factor_blocks`]. The 3×3 products are written out on the stored entries
 /// (measured: half the instructions of nalgebra's generic products here), and fused on
-/// processors with AVX2 and FMA, as in [`factor_blocks`].
+/// processors with AVX2 and FMA, where the factor's off-diagonal blocks are row-major
+/// ([`rows`]).
 pub(crate) fn solve_blocks(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
     #[cfg(target_arch = "x86_64")]
     if splinerod_core::lanes::wide() {
         // SAFETY: the processor has AVX2 and FMA (checked on the line above).
         return unsafe { solve_blocks_wide(u, n, bw, x) };
     }
-    solve_blocks_with::<false>(u, n, bw, x)
+    solve_blocks_with::<false, false>(u, n, bw, x)
 }
 
-/// [`solve_blocks_with`] fused, compiled for AVX2 and FMA.
+/// [`solve_blocks_with`] fused on the row-form factor, compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn solve_blocks_wide(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
-    solve_blocks_with::<true>(u, n, bw, x)
+    solve_blocks_with::<true, true>(u, n, bw, x)
 }
 
-/// [`solve_blocks`], its products fused with `FUSED`.
+/// Where entry `(r, c)` of an off-diagonal factor block is: `3r + c` if `ROWS` (the
+/// fused factor's row-major blocks), else `3c + r` (column-major).
 #[inline(always)]
-fn solve_blocks_with<const FUSED: bool>(u: &[Matrix3<Real>], n: usize, bw: usize, x: &mut [Real]) {
+fn at<const ROWS: bool>(r: usize, c: usize) -> usize {
+    if ROWS {
+        3 * r + c
+    } else {
+        3 * c + r
+    }
+}
+
+/// [`solve_blocks`], its products fused with `FUSED`, the off-diagonal blocks row-major
+/// with `ROWS` (the diagonal slots always column-major).
+#[inline(always)]
+fn solve_blocks_with<const FUSED: bool, const ROWS: bool>(
+    u: &[Matrix3<Real>],
+    n: usize,
+    bw: usize,
+    x: &mut [Real],
+) {
     let w = bw + 1;
     // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
     for i in 0..n {
@@ -213,7 +234,8 @@ fn solve_blocks_with<const FUSED: bool>(u: &[Matrix3<Real>], n: usize, bw: usize
             let m = entries(&u[k * w + (i - k)]);
             let y = [y[0], y[1], y[2]];
             for (c, r) in r.iter_mut().enumerate() {
-                *r = sub_dot::<FUSED>(*r, column(&m, c), y);
+                let column = std::array::from_fn(|t| m[at::<ROWS>(t, c)]);
+                *r = sub_dot::<FUSED>(*r, column, y);
             }
         }
         rest[..3].copy_from_slice(&lower_product::<FUSED>(&entries(&u[i * w]), r));
@@ -228,7 +250,8 @@ fn solve_blocks_with<const FUSED: bool>(u: &[Matrix3<Real>], n: usize, bw: usize
             let m = entries(block);
             let xj = [xj[0], xj[1], xj[2]];
             for (c, r) in r.iter_mut().enumerate() {
-                *r = sub_dot::<FUSED>(*r, [m[c], m[3 + c], m[6 + c]], xj);
+                let row = std::array::from_fn(|t| m[at::<ROWS>(c, t)]);
+                *r = sub_dot::<FUSED>(*r, row, xj);
             }
         }
         own.copy_from_slice(&lower_transposed_product::<FUSED>(&entries(&u[i * w]), r));
