@@ -51,6 +51,8 @@ pub mod refine;
 mod ring;
 pub mod rod;
 pub mod segments;
+#[cfg(target_arch = "x86_64")]
+pub mod simd;
 pub mod state;
 
 /// The scalar type of every physical quantity.

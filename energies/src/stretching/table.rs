@@ -263,6 +263,13 @@ fn moment_derivatives<const FUSED: bool>(
     r: &mut [Vector3<Real>],
     db: &mut [Vector3<Real>],
 ) {
+    #[cfg(target_arch = "x86_64")]
+    if FUSED {
+        // SAFETY: the fused pass runs only where the processor has AVX2 and FMA
+        // (`Stretching::lumped_derivatives_wide`).
+        unsafe { moment_derivatives_wide(q, g, rows, r, db) };
+        return;
+    }
     let width = q.len();
     let origin = q.first().copied().unwrap_or_default();
     for (r, q) in r.iter_mut().zip(q) {
@@ -276,6 +283,44 @@ fn moment_derivatives<const FUSED: bool>(
             add_times::<FUSED>(&mut sum, r, g[rows[lo] + hi - lo]);
         }
         db[b] = sum;
+    }
+}
+
+/// [`moment_derivatives`] fused, each 3-vector in a four-wide register
+/// ([`splinerod_core::simd`]): the same products in the same order, lane by lane.
+///
+/// # Safety
+/// The processor must have AVX2 and FMA; `r` and `db` must hold `q.len()` entries.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn moment_derivatives_wide(
+    q: &[Vector3<Real>],
+    g: &[Real],
+    rows: &[usize],
+    r: &mut [Vector3<Real>],
+    db: &mut [Vector3<Real>],
+) {
+    use core::arch::x86_64::*;
+    use splinerod_core::simd::{load3, store3};
+    let width = q.len().min(MAX_WIDTH).min(r.len()).min(db.len());
+    let Some(first) = q.first() else {
+        return;
+    };
+    let origin = load3(first.as_ptr());
+    // Plain loops, no closures (see `splinerod_core::simd`).
+    let mut offsets = [_mm256_setzero_pd(); MAX_WIDTH];
+    for a in 0..width {
+        offsets[a] = _mm256_sub_pd(load3(q[a].as_ptr()), origin);
+        store3(r[a].as_mut_ptr(), offsets[a]);
+    }
+    for b in 0..width {
+        let mut sum = _mm256_setzero_pd();
+        for (a, offset) in offsets.iter().enumerate().take(width) {
+            // G is symmetric: entry (a, b) is stored at its upper place.
+            let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+            sum = _mm256_fmadd_pd(*offset, _mm256_set1_pd(g[rows[lo] + hi - lo]), sum);
+        }
+        store3(db[b].as_mut_ptr(), sum);
     }
 }
 

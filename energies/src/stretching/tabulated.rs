@@ -185,6 +185,13 @@ fn add_function_blocks<const FUSED: bool>(
         add_scaled_identities(hessian, k, lambda);
         return;
     }
+    #[cfg(target_arch = "x86_64")]
+    if FUSED {
+        // SAFETY: the fused pass runs only where the processor has AVX2 and FMA
+        // (`Stretching::lumped_derivatives_wide`).
+        unsafe { add_function_blocks_wide(hessian, k, c, lambda) };
+        return;
+    }
     for (a, va) in v.iter().enumerate() {
         let u = va * c;
         let g = &k.g[k.rows[a]..];
@@ -200,6 +207,49 @@ fn add_function_blocks<const FUSED: bool>(
             e[4] += d;
             e[8] += d;
             *block = sum;
+        }
+    }
+}
+
+/// [`add_function_blocks`] fused, a block's columns in four-wide registers
+/// ([`splinerod_core::simd`]): column `c` takes \\(c\\,\\partial_a b\\, (\\partial_b b)_c\\) in
+/// one fused multiply-add, then its diagonal entry \\(\\lambda (G_k)_{ab}\\) (and −0
+/// elsewhere, which leaves every value as it is): the same operations, lane by lane, as
+/// the scalar fused pass.
+///
+/// # Safety
+/// The processor must have AVX2 and FMA; the band must be wide enough for the function.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn add_function_blocks_wide(
+    hessian: &mut BlockBanded,
+    k: &Moment<'_>,
+    c: Real,
+    lambda: Real,
+) {
+    use core::arch::x86_64::*;
+    use splinerod_core::simd::{load3, load_block, store_block};
+    let v = k.db;
+    let negative_zero = _mm256_set1_pd(-0.0);
+    // Plain loops, no closures (see `splinerod_core::simd`).
+    for (a, va) in v.iter().enumerate() {
+        let u = _mm256_mul_pd(load3(va.as_ptr()), _mm256_set1_pd(c));
+        let g = &k.g[k.rows[a]..];
+        let row = hessian.band_row_mut(k.first + a);
+        for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
+            let p = block.as_mut_ptr();
+            let d = _mm256_set1_pd(lambda * gab);
+            let diagonal = [
+                _mm256_blend_pd::<0b0001>(negative_zero, d),
+                _mm256_blend_pd::<0b0010>(negative_zero, d),
+                _mm256_blend_pd::<0b0100>(negative_zero, d),
+            ];
+            let mut columns = load_block(p);
+            for (column, (&vbc, diagonal)) in columns.iter_mut().zip(vb.iter().zip(diagonal)) {
+                let product = _mm256_fmadd_pd(u, _mm256_set1_pd(vbc), *column);
+                *column = _mm256_add_pd(product, diagonal);
+            }
+            store_block(p, columns);
         }
     }
 }

@@ -18,43 +18,19 @@ use super::not_definite;
 use crate::IntegratorError;
 use core::arch::x86_64::*;
 use nalgebra::Matrix3;
+use splinerod_core::simd::{load_block, store_block, Triple};
 use splinerod_core::Real;
 
 /// Three rows (or columns) of a 3×3 block, one per register.
-type Rows = [__m256d; 3];
-
-/// The three 3-vectors stored one after the other at `p` (the rows of a row-major
-/// block, the columns of a column-major one). Lane 3 of each holds the next entry.
-///
-/// # Safety
-/// `p` must point at 9 readable values; the processor must have AVX2.
-#[inline(always)]
-unsafe fn load_rows(p: *const Real) -> Rows {
-    // The third vector ends the block: loaded from one entry earlier and shifted down.
-    let last = _mm256_permute4x64_pd::<0b11_11_10_01>(_mm256_loadu_pd(p.add(5)));
-    [_mm256_loadu_pd(p), _mm256_loadu_pd(p.add(3)), last]
-}
-
-/// Writes three 3-vectors one after the other at `p` (9 values; the lanes 3 are
-/// overwritten by the next vector or not stored).
-///
-/// # Safety
-/// `p` must point at 9 writable values; the processor must have AVX2.
-#[inline(always)]
-unsafe fn store_rows(p: *mut Real, rows: Rows) {
-    _mm256_storeu_pd(p, rows[0]);
-    _mm256_storeu_pd(p.add(3), rows[1]);
-    _mm_storeu_pd(p.add(6), _mm256_castpd256_pd128(rows[2]));
-    _mm_store_sd(p.add(8), _mm256_extractf128_pd::<1>(rows[2]));
-}
+type Rows = Triple;
 
 /// The rows of the column-major block at `p`.
 ///
 /// # Safety
-/// As [`load_rows`].
+/// As [`load_block`].
 #[inline(always)]
 unsafe fn load_transposed(p: *const Real) -> Rows {
-    let [c0, c1, c2] = load_rows(p);
+    let [c0, c1, c2] = load_block(p);
     let (t0, t1) = (_mm256_unpacklo_pd(c0, c1), _mm256_unpackhi_pd(c0, c1));
     let (t2, t3) = (_mm256_unpacklo_pd(c2, c2), _mm256_unpackhi_pd(c2, c2));
     [
@@ -97,19 +73,23 @@ unsafe fn lower_times(l: &Entries, m: &Rows) -> Rows {
     out
 }
 
-/// The lower entries of the symmetric block whose rows are `s`, column-major (the
-/// upper entries are not read by [`inverse_cholesky`] and left zero).
+/// The lower entries `(r ≥ c)` of the diagonal block, column-major, from `s`: the
+/// columns of \\(A_{ii}\\) as loaded, each updated as a row by the symmetric Gram sum
+/// (whose entries `(r, c)` and `(c, r)` are the same products in the same order). So
+/// entry `(r, c)` is lane `r` of vector `c`: \\(A_{rc}\\) minus the sum, the lower
+/// entry the plain path computes, also where assembly left \\(A_{ii}\\) asymmetric by
+/// round-off. The upper entries are not read by [`inverse_cholesky`] and left zero.
 ///
 /// # Safety
 /// The processor must have AVX.
 #[inline(always)]
 unsafe fn lower_entries(s: &Rows) -> Entries {
-    let mut rows = [0.0; 12];
-    for (r, row) in s.iter().enumerate() {
-        _mm256_storeu_pd(rows.as_mut_ptr().add(4 * r), *row);
+    let mut lanes = [0.0; 12];
+    for (c, column) in s.iter().enumerate() {
+        _mm256_storeu_pd(lanes.as_mut_ptr().add(4 * c), *column);
     }
     [
-        rows[0], rows[4], rows[8], 0.0, rows[5], rows[9], 0.0, 0.0, rows[10],
+        lanes[0], lanes[1], lanes[2], 0.0, lanes[5], lanes[6], 0.0, 0.0, lanes[10],
     ]
 }
 
@@ -140,10 +120,10 @@ pub(super) unsafe fn factor_rows(
     // (n − 1)·w + 1, checked above; each is 9 values.
     let at = |slot: usize| base.add(9 * slot);
     for i in 0..n {
-        let mut s = load_rows(at(i * w));
+        let mut s = load_block(at(i * w));
         for k in i.saturating_sub(bw)..i {
             let a = at(k * w + (i - k));
-            sub_transposed_times(&mut s, a, &load_rows(a));
+            sub_transposed_times(&mut s, a, &load_block(a));
         }
         let linv = inverse_cholesky(&lower_entries(&s)).ok_or_else(not_definite)?;
         std::ptr::copy_nonoverlapping(linv.as_ptr(), at(i * w), 9);
@@ -151,10 +131,10 @@ pub(super) unsafe fn factor_rows(
             let slot = at(i * w + (j - i));
             let mut m = load_transposed(slot);
             for k in j.saturating_sub(bw)..i {
-                let b = load_rows(at(k * w + (j - k)));
+                let b = load_block(at(k * w + (j - k)));
                 sub_transposed_times(&mut m, at(k * w + (i - k)), &b);
             }
-            store_rows(slot, lower_times(&linv, &m));
+            store_block(slot, lower_times(&linv, &m));
         }
     }
     Ok(())
