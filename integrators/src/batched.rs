@@ -164,21 +164,28 @@ fn sub_mul<const FUSED: bool>(mut acc: Lanes, a: Lanes, b: Lanes) -> Lanes {
 #[inline(always)]
 fn product<const FUSED: bool>(m: &Block, v: &[Lanes; 3], transposed: bool) -> [Lanes; 3] {
     // The sums of `sub_product` from zero, negated: the same roundings (rounding to
-    // nearest is symmetric), without a pass to negate them.
-    std::array::from_fn(|row| {
-        let e = |col: usize| {
-            if transposed {
-                m[3 * row + col]
-            } else {
-                m[3 * col + row]
-            }
-        };
-        let mut acc = splinerod_core::lanes::mul(e(0), v[0]);
+    // nearest is symmetric), without a pass to negate them. Plain loops, no closures: a
+    // closure is compiled without the caller's target features and, when not inlined
+    // (measured: it was not after unrelated changes elsewhere in the crate), its
+    // products run as scalar SSE and library calls.
+    let mut out = [[0.0; LANES]; 3];
+    for (row, acc) in out.iter_mut().enumerate() {
+        *acc = splinerod_core::lanes::mul(entry(m, row, 0, transposed), v[0]);
         for (col, vc) in v.iter().enumerate().skip(1) {
-            splinerod_core::lanes::fma::<FUSED>(&mut acc, e(col), *vc);
+            splinerod_core::lanes::fma::<FUSED>(acc, entry(m, row, col, transposed), *vc);
         }
-        acc
-    })
+    }
+    out
+}
+
+/// Entry `(row, col)` of the column-major block `m` (of `mᵀ` with `transposed`).
+#[inline(always)]
+fn entry(m: &Block, row: usize, col: usize, transposed: bool) -> Lanes {
+    if transposed {
+        m[3 * row + col]
+    } else {
+        m[3 * col + row]
+    }
 }
 
 /// `r −= m v` (or `mᵀ v` with `transposed`), lane by lane.
