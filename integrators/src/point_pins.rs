@@ -98,8 +98,14 @@ impl PointPins {
         self.saved.clear();
         self.saved.resize(self.pins.len() * width, Matrix3::zeros());
         for (e, &(_, k)) in self.pins.iter().enumerate() {
+            // Block (j, k) of the band: stored as (j, k) above the diagonal, as the
+            // transpose of (k, j) below it.
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
-                self.saved[e * width + j + bw - k] = a.block(j, k);
+                self.saved[e * width + j + bw - k] = if j <= k {
+                    *a.upper(j, k - j)
+                } else {
+                    a.upper(k, j - k).transpose()
+                };
             }
         }
         self.save_far(a.far_blocks());
@@ -114,15 +120,22 @@ impl PointPins {
                     f.block = q * f.block;
                 }
             }
-            // A point held in every direction (q = 0, the usual pin): its column is
-            // the identity's, without the products by zero.
-            let held = q == Matrix3::zeros();
+            // A point held in every direction (q = 0, the usual pin): its row and
+            // column are the identity's, written straight into the band.
+            if q == Matrix3::zeros() {
+                let row = a.band_row_mut(k);
+                row[0] = *p;
+                row[1..].fill(Matrix3::zeros());
+                for j in k.saturating_sub(bw)..k {
+                    a.band_row_mut(j)[k - j] = Matrix3::zeros();
+                }
+                continue;
+            }
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
-                let value = match (j == k, held) {
-                    (true, true) => *p,
-                    (false, true) => Matrix3::zeros(),
-                    (true, false) => q * a.block(k, k) * q + p,
-                    (false, false) => a.block(j, k) * q,
+                let value = if j == k {
+                    q * a.block(k, k) * q + p
+                } else {
+                    a.block(j, k) * q
                 };
                 a.set_block(j, k, &value);
             }
