@@ -437,11 +437,10 @@ impl BlockBanded {
         c: &impl Fn(usize) -> Real,
         m: &SymBanded,
     ) {
-        use crate::simd::{load_block, store_block};
+        use crate::simd::{add_diagonal, load_block, store_block};
         use core::arch::x86_64::*;
         let (w, n, mw) = (self.bandwidth + 1, self.n, m.bandwidth() + 1);
         let scale = _mm256_set1_pd(s);
-        let negative_zero = _mm256_set1_pd(-0.0);
         let rows = self
             .blocks
             .chunks_exact_mut(w)
@@ -457,15 +456,7 @@ impl BlockBanded {
                     *column = _mm256_mul_pd(*column, scale);
                 }
                 if k < near {
-                    let v = _mm256_set1_pd(ci * mass[k]);
-                    let diagonal = [
-                        _mm256_blend_pd::<0b0001>(negative_zero, v),
-                        _mm256_blend_pd::<0b0010>(negative_zero, v),
-                        _mm256_blend_pd::<0b0100>(negative_zero, v),
-                    ];
-                    for (column, d) in columns.iter_mut().zip(diagonal) {
-                        *column = _mm256_add_pd(*column, d);
-                    }
+                    add_diagonal(&mut columns, ci * mass[k]);
                 }
                 store_block(p, columns);
             }

@@ -64,6 +64,20 @@ pub unsafe fn store_block(p: *mut Real, block: Triple) {
     store3(p.add(6), block[2]);
 }
 
+/// Adds `d` (lane 0) to the diagonal of the block whose columns (or rows) are `block`:
+/// entry `c` of vector `c`. The other lanes take −0, which leaves every value as it is
+/// (also a −0), so this is the scalar `b[(c, c)] += d` bit for bit.
+///
+/// # Safety
+/// The processor must have AVX.
+#[inline(always)]
+pub unsafe fn add_diagonal(block: &mut Triple, d: Real) {
+    let (d, negative_zero) = (_mm256_set1_pd(d), _mm256_set1_pd(-0.0));
+    block[0] = _mm256_add_pd(block[0], _mm256_blend_pd::<0b0001>(negative_zero, d));
+    block[1] = _mm256_add_pd(block[1], _mm256_blend_pd::<0b0010>(negative_zero, d));
+    block[2] = _mm256_add_pd(block[2], _mm256_blend_pd::<0b0100>(negative_zero, d));
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,6 +100,14 @@ mod tests {
             let twice = block.map(|b| _mm256_add_pd(b, b));
             store_block(buffer.as_mut_ptr().add(1), twice);
             store3(buffer.as_mut_ptr().add(10), _mm256_add_pd(v, v));
+            // A diagonal added: only the entries (c, c) change, −0 stays −0.
+            let mut block = [0.0, -0.0, 1.0, -0.0, 2.0, 3.0, 4.0, 5.0, -0.0];
+            let mut columns = load_block(block.as_ptr());
+            add_diagonal(&mut columns, 0.5);
+            store_block(block.as_mut_ptr(), columns);
+            let bits = |b: &[Real]| b.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let expected = [0.5, -0.0, 1.0, -0.0, 2.5, 3.0, 4.0, 5.0, 0.5];
+            assert_eq!(bits(&block), bits(&expected));
         }
         let expected: Vec<Real> = (0..13)
             .map(|k| if k == 0 { 0.5 } else { 2.0 * (k as Real + 0.5) })

@@ -228,9 +228,8 @@ unsafe fn add_function_blocks_wide(
     lambda: Real,
 ) {
     use core::arch::x86_64::*;
-    use splinerod_core::simd::{load3, load_block, store_block};
+    use splinerod_core::simd::{add_diagonal, load3, load_block, store_block};
     let v = k.db;
-    let negative_zero = _mm256_set1_pd(-0.0);
     // Plain loops, no closures (see `splinerod_core::simd`).
     for (a, va) in v.iter().enumerate() {
         let u = _mm256_mul_pd(load3(va.as_ptr()), _mm256_set1_pd(c));
@@ -238,17 +237,11 @@ unsafe fn add_function_blocks_wide(
         let row = hessian.band_row_mut(k.first + a);
         for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
             let p = block.as_mut_ptr();
-            let d = _mm256_set1_pd(lambda * gab);
-            let diagonal = [
-                _mm256_blend_pd::<0b0001>(negative_zero, d),
-                _mm256_blend_pd::<0b0010>(negative_zero, d),
-                _mm256_blend_pd::<0b0100>(negative_zero, d),
-            ];
             let mut columns = load_block(p);
-            for (column, (&vbc, diagonal)) in columns.iter_mut().zip(vb.iter().zip(diagonal)) {
-                let product = _mm256_fmadd_pd(u, _mm256_set1_pd(vbc), *column);
-                *column = _mm256_add_pd(product, diagonal);
+            for (column, &vbc) in columns.iter_mut().zip(vb.iter()) {
+                *column = _mm256_fmadd_pd(u, _mm256_set1_pd(vbc), *column);
             }
+            add_diagonal(&mut columns, lambda * gab);
             store_block(p, columns);
         }
     }
