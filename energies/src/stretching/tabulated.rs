@@ -171,7 +171,8 @@ pub(super) fn add_scaled(
 /// `a ≤ b`, in one pass over its blocks of the band (the same sums, in the same order,
 /// as [`add_outer_products`] then [`add_scaled_identities`], which take a band too
 /// narrow for it).
-/// With `FUSED` the rank-one products are fused (see [`super::table::add_times`]).
+/// With `FUSED` (processors with AVX2 and FMA) the blocks are updated in four-wide
+/// registers (`add_function_blocks_wide`).
 #[inline(always)]
 fn add_function_blocks<const FUSED: bool>(
     hessian: &mut BlockBanded,
@@ -200,7 +201,7 @@ fn add_function_blocks<const FUSED: bool>(
             // The block summed in registers and stored once (adding `d` to the stored
             // diagonal would reload entries just stored, and wait on the store).
             let mut sum = *block;
-            add_rank_one::<FUSED>(&mut sum, &u, vb);
+            add_rank_one(&mut sum, &u, vb);
             let d = lambda * gab;
             let e = sum.as_mut_slice();
             e[0] += d;
@@ -287,7 +288,7 @@ pub(super) fn add_outer_products(
             let u = va * c;
             let row = hessian.band_row_mut(first + a);
             for (block, vb) in row.iter_mut().zip(&v[a..]) {
-                add_rank_one::<false>(block, &u, vb);
+                add_rank_one(block, &u, vb);
             }
         }
     } else {
@@ -301,23 +302,15 @@ pub(super) fn add_outer_products(
 }
 
 /// `block += u vᵀ`, written out (the compiler keeps it in registers; a temporary 3×3
-/// product through nalgebra's operators was measured 2–3 times slower here), each
-/// product fused with `FUSED`.
+/// product through nalgebra's operators was measured 2–3 times slower here). The
+/// fused pass does this in four-wide registers instead (`add_function_blocks_wide`).
 #[inline(always)]
-fn add_rank_one<const FUSED: bool>(
-    block: &mut Matrix3<Real>,
-    u: &Vector3<Real>,
-    v: &Vector3<Real>,
-) {
+fn add_rank_one(block: &mut Matrix3<Real>, u: &Vector3<Real>, v: &Vector3<Real>) {
     // Column-major: entry (r, c) at 3c + r.
     let e = block.as_mut_slice();
     for (column, &vc) in e.chunks_exact_mut(3).zip(v.iter()) {
         for (x, &ur) in column.iter_mut().zip(u.iter()) {
-            *x = if FUSED {
-                ur.mul_add(vc, *x)
-            } else {
-                *x + ur * vc
-            };
+            *x += ur * vc;
         }
     }
 }
