@@ -64,16 +64,19 @@ pub type Preconditioner<'a> = dyn FnMut(&mut [Real]) -> Result<(), IntegratorErr
 /// dropped.
 pub const DIVERGENCE: Real = 1e3;
 
-/// Buffers of the correction (no allocation once sized).
+/// Buffers of the correction (no allocation once sized). The preconditioner works on
+/// flat coordinates (`z`), the remainder on 3-vectors (the rest).
 #[derive(Debug, Default)]
 pub struct RemainderCg {
-    rho: Vec<Real>,
+    /// The preconditioned residual, flat.
     z: Vec<Real>,
-    p: Vec<Real>,
-    ap: Vec<Real>,
-    e: Vec<Real>,
+    /// `z` as 3-vectors, the remainder's input.
     v: Vec<Vector3<Real>>,
-    out: Vec<Vector3<Real>>,
+    rho: Vec<Vector3<Real>>,
+    p: Vec<Vector3<Real>>,
+    /// \\(A p\\), then \\(\\beta A p + \\rho\\) for the next product to complete.
+    ap: Vec<Vector3<Real>>,
+    e: Vec<Vector3<Real>>,
 }
 
 impl RemainderCg {
@@ -87,122 +90,179 @@ impl RemainderCg {
         remainder: &mut Remainder<'_>,
         precondition: &mut Preconditioner<'_>,
     ) -> Result<usize, IntegratorError> {
-        self.resize(dx.len() / 3);
-        // ρ₀ = −sR Δx₀, z₀ = 𝒫⁻¹ρ₀.
-        self.rho.iter_mut().for_each(|r| *r = 0.0);
-        self.add_product(remainder, dx, -1.0, Target::Rho);
-        self.z.copy_from_slice(&self.rho);
-        precondition(&mut self.z)?;
-        let mut gamma = dot(&self.rho, &self.z);
-        if breakdown(gamma) {
+        let Some((mut gamma, mut p_max)) = self.begin(dx, remainder, precondition)? else {
             return Ok(0);
-        }
+        };
         let start = largest(dx);
-        self.p.copy_from_slice(&self.z);
-        self.e.iter_mut().for_each(|e| *e = 0.0);
-        self.ap.iter_mut().for_each(|a| *a = 0.0);
-        let mut iterations = 0;
-        let mut previous = Real::INFINITY;
+        let (mut iterations, mut previous) = (0, Real::INFINITY);
+        // Σ of the changes: with `start`, a bound of the corrected step's largest entry.
+        let mut moved = 0.0;
         while iterations < MAX_ITERATIONS {
             iterations += 1;
-            self.add_product_of_z(remainder);
-            let pap = dot(&self.p, &self.ap);
+            // A p = (β A p₋₁ + ρ) + sR z.
+            remainder(&self.v, 1.0, &mut self.ap);
+            let pap: Real = self.p.iter().zip(&self.ap).map(|(p, a)| p.dot(a)).sum();
             if breakdown(pap) {
                 break;
             }
             let alpha = gamma / pap;
-            let mut change: Real = 0.0;
             for (e, p) in self.e.iter_mut().zip(&self.p) {
-                *e += alpha * p;
-                change = change.max((alpha * p).abs());
+                *e += p * alpha;
             }
-            let size = dx
-                .iter()
-                .zip(&self.e)
-                .map(|(d, e)| (d + e).abs())
-                .fold(0.0, Real::max);
+            // max |α p| exactly (rounding is monotone and symmetric).
+            let change = alpha.abs() * p_max;
+            moved += change;
+            let size = Bound {
+                start,
+                moved,
+                floor,
+            }
+            .size(dx, &self.e);
             if remaining(change, previous) <= floor.max(RELATIVE_TOLERANCE * size) {
                 break;
             }
             previous = change;
             if size.is_nan() || size > DIVERGENCE * start {
                 // Not a contraction after all (round-off): keep P's step.
-                self.e.iter_mut().for_each(|e| *e = 0.0);
+                self.e.iter_mut().for_each(|e| *e = Vector3::zeros());
                 break;
             }
-            for (r, ap) in self.rho.iter_mut().zip(&self.ap) {
-                *r -= alpha * ap;
-            }
-            self.z.copy_from_slice(&self.rho);
-            precondition(&mut self.z)?;
-            let next = dot(&self.rho, &self.z);
+            let next = self.next_residual(alpha, precondition)?;
             if breakdown(next) {
                 break;
             }
-            let beta = next / gamma;
+            p_max = self.next_direction(next / gamma);
             gamma = next;
-            for ((p, z), ap) in self.p.iter_mut().zip(&self.z).zip(self.ap.iter_mut()) {
-                *p = z + beta * *p;
-                // Scaled here so that the next product only adds ρ + sR z.
-                *ap *= beta;
-            }
         }
-        dx.iter_mut().zip(&self.e).for_each(|(d, e)| *d += e);
+        for (d, e) in dx.chunks_exact_mut(3).zip(&self.e) {
+            d.iter_mut().zip(e.iter()).for_each(|(d, e)| *d += e);
+        }
         Ok(iterations)
     }
 
-    /// `ap += ρ + sR z`: with `ap` holding \\(\\beta A p_{k-1}\\), the product \\(A p_k\\).
-    fn add_product_of_z(&mut self, remainder: &mut Remainder<'_>) {
-        for (ap, r) in self.ap.iter_mut().zip(&self.rho) {
-            *ap += r;
+    /// Sizes the buffers, sets \\(\\rho_0 = -sR\\, \\Delta x_0\\), `z₀ = 𝒫⁻¹ρ₀`, `p₀ = z₀`,
+    /// `e = 0` and `ap = ρ₀` (the product's start); returns \\(\\gamma_0 = \\rho_0 \\cdot
+    /// z_0\\) and the largest entry of `p₀`, or `None` on a breakdown.
+    fn begin(
+        &mut self,
+        dx: &[Real],
+        remainder: &mut Remainder<'_>,
+        precondition: &mut Preconditioner<'_>,
+    ) -> Result<Option<(Real, Real)>, IntegratorError> {
+        self.resize(dx.len() / 3);
+        for ((v, r), d) in self.v.iter_mut().zip(&mut self.rho).zip(dx.chunks_exact(3)) {
+            (*v, *r) = (Vector3::new(d[0], d[1], d[2]), Vector3::zeros());
         }
-        let z = std::mem::take(&mut self.z);
-        self.add_product(remainder, &z, 1.0, Target::Ap);
-        self.z = z;
+        remainder(&self.v, -1.0, &mut self.rho);
+        for (z, r) in self.z.chunks_exact_mut(3).zip(&self.rho) {
+            z.copy_from_slice(r.as_slice());
+        }
+        let gamma = self.preconditioned(precondition)?;
+        if breakdown(gamma) {
+            return Ok(None);
+        }
+        let mut p_max: Real = 0.0;
+        for ((p, e), (ap, (v, rho))) in self
+            .p
+            .iter_mut()
+            .zip(self.e.iter_mut())
+            .zip(self.ap.iter_mut().zip(self.v.iter().zip(&self.rho)))
+        {
+            (*p, *e, *ap) = (*v, Vector3::zeros(), *rho);
+            p_max = p.iter().fold(p_max, |m, x| larger(m, x.abs()));
+        }
+        Ok(Some((gamma, p_max)))
     }
 
-    /// Adds `sign · sR input` to the target buffer.
-    fn add_product(
+    /// `ρ −= α A p` and `z = 𝒫⁻¹ρ`; returns \\(\\rho \\cdot z\\).
+    fn next_residual(
         &mut self,
-        remainder: &mut Remainder<'_>,
-        input: &[Real],
-        sign: Real,
-        target: Target,
-    ) {
-        for (v, c) in self.v.iter_mut().zip(input.chunks_exact(3)) {
-            *v = Vector3::new(c[0], c[1], c[2]);
+        alpha: Real,
+        precondition: &mut Preconditioner<'_>,
+    ) -> Result<Real, IntegratorError> {
+        for ((r, ap), z) in self
+            .rho
+            .iter_mut()
+            .zip(&self.ap)
+            .zip(self.z.chunks_exact_mut(3))
+        {
+            *r -= ap * alpha;
+            z.copy_from_slice(r.as_slice());
         }
-        self.out.iter_mut().for_each(|o| *o = Vector3::zeros());
-        remainder(&self.v, sign, &mut self.out);
-        let buffer = match target {
-            Target::Rho => &mut self.rho,
-            Target::Ap => &mut self.ap,
-        };
-        for (b, o) in buffer.chunks_exact_mut(3).zip(&self.out) {
-            b.iter_mut().zip(o.iter()).for_each(|(b, o)| *b += o);
+        self.preconditioned(precondition)
+    }
+
+    /// `p = z + β p` and `ap = β A p + ρ` (so that the next product only adds `sR z`);
+    /// returns the largest entry of the new `p`.
+    fn next_direction(&mut self, beta: Real) -> Real {
+        let mut p_max: Real = 0.0;
+        for ((p, v), (ap, rho)) in self
+            .p
+            .iter_mut()
+            .zip(&self.v)
+            .zip(self.ap.iter_mut().zip(&self.rho))
+        {
+            *p = v + *p * beta;
+            p_max = p.iter().fold(p_max, |m, x| larger(m, x.abs()));
+            *ap = *ap * beta + rho;
         }
+        p_max
+    }
+
+    /// `z ← 𝒫⁻¹z` (`z` holding ρ), also as 3-vectors in `v`; returns \\(\\rho \\cdot z\\).
+    fn preconditioned(
+        &mut self,
+        precondition: &mut Preconditioner<'_>,
+    ) -> Result<Real, IntegratorError> {
+        precondition(&mut self.z)?;
+        let mut dot = 0.0;
+        for ((v, z), r) in self.v.iter_mut().zip(self.z.chunks_exact(3)).zip(&self.rho) {
+            *v = Vector3::new(z[0], z[1], z[2]);
+            dot += r.dot(v);
+        }
+        Ok(dot)
     }
 
     fn resize(&mut self, n: usize) {
+        self.z.resize(3 * n, 0.0);
         for v in [
+            &mut self.v,
             &mut self.rho,
-            &mut self.z,
             &mut self.p,
             &mut self.ap,
             &mut self.e,
         ] {
-            v.resize(3 * n, 0.0);
+            v.resize(n, Vector3::zeros());
         }
-        self.v.resize(n, Vector3::zeros());
-        self.out.resize(n, Vector3::zeros());
     }
 }
 
-/// Which buffer a product goes to.
-#[derive(Clone, Copy)]
-enum Target {
-    Rho,
-    Ap,
+/// What decides the corrected step's size without measuring it: `start` (the largest
+/// entry of `P`'s step) plus `moved` (the sum of the changes so far) bounds every entry
+/// of `dx + e`, and below [`DIVERGENCE`] `· start` and `floor /` [`RELATIVE_TOLERANCE`]
+/// the size changes neither test it enters.
+struct Bound {
+    start: Real,
+    moved: Real,
+    floor: Real,
+}
+
+impl Bound {
+    /// The largest entry of `dx + e`, or a bound of it that decides the same tests (a
+    /// factor 2 above the sum, for the rounding of the sums).
+    fn size(&self, dx: &[Real], e: &[Vector3<Real>]) -> Real {
+        let bound = 2.0 * (self.start + self.moved);
+        if bound <= DIVERGENCE * self.start && RELATIVE_TOLERANCE * bound <= self.floor {
+            return bound;
+        }
+        let mut size: Real = 0.0;
+        for (d, e) in dx.chunks_exact(3).zip(e) {
+            for (d, e) in d.iter().zip(e.iter()) {
+                size = larger(size, (d + e).abs());
+            }
+        }
+        size
+    }
 }
 
 /// The error left in the step after a correction of largest entry `change` that
@@ -225,11 +285,18 @@ fn breakdown(x: Real) -> bool {
 }
 
 fn largest(v: &[Real]) -> Real {
-    v.iter().fold(0.0, |m: Real, x| m.max(x.abs()))
+    v.iter().fold(0.0, |m, x| larger(m, x.abs()))
 }
 
-fn dot(a: &[Real], b: &[Real]) -> Real {
-    a.iter().zip(b).map(|(a, b)| a * b).sum()
+/// `m.max(x)` for an `m` that is not NaN (a NaN `x` leaves `m`, as `max` does), in one
+/// comparison: the NaN-propagating form of `max` costs several instructions per entry.
+#[inline]
+fn larger(m: Real, x: Real) -> Real {
+    if x > m {
+        x
+    } else {
+        m
+    }
 }
 
 #[cfg(test)]

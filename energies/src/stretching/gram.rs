@@ -245,18 +245,67 @@ fn factor(u: &mut [Real], w: usize) {
     }
 }
 
-/// Solves `UᵀU x = r` in place with the banded factor `u` (rows of `w` entries).
+/// Solves `UᵀU x = r` in place with the banded factor `u` (rows of `w` entries); the
+/// rows of a cubic's factor (3 entries) with the width a constant, which unrolls them.
 fn band_solve(u: &[Real], w: usize, x: &mut [Real]) {
+    match w {
+        3 => band_solve_with::<3>(u, x),
+        _ => band_solve_rows(u, w, x, 0..x.len().min(u.len() / w.max(1))),
+    }
+}
+
+/// [`band_solve`] with rows of `W` entries: the rows whose entries all lie inside `x`
+/// unrolled, the last `W − 1` by the general loops.
+#[inline(always)]
+fn band_solve_with<const W: usize>(u: &[Real], x: &mut [Real]) {
+    let n = x.len().min(u.len() / W);
+    let inner = n.saturating_sub(W - 1);
     // Uᵀ y = r, row by row of U.
-    for (i, row) in u.chunks_exact(w).enumerate() {
+    for (i, row) in u[..inner * W].chunks_exact(W).enumerate() {
+        let yi = x[i] / row[0];
+        x[i] = yi;
+        let next = &mut x[i + 1..i + W];
+        for o in 1..W {
+            next[o - 1] -= row[o] * yi;
+        }
+    }
+    forward_rows(u, W, x, inner..n);
+    backward_rows(u, W, x, inner..n);
+    // U x = y.
+    for (i, row) in u[..inner * W].chunks_exact(W).enumerate().rev() {
+        let (head, tail) = x[i..i + W].split_at_mut(1);
+        let mut s = row[1] * tail[0];
+        for o in 2..W {
+            s += row[o] * tail[o - 1];
+        }
+        head[0] = (head[0] - s) / row[0];
+    }
+}
+
+/// [`band_solve`] on the rows `range` (all of `x`'s) of a factor with rows of `w`.
+fn band_solve_rows(u: &[Real], w: usize, x: &mut [Real], range: std::ops::Range<usize>) {
+    forward_rows(u, w, x, range.clone());
+    backward_rows(u, w, x, range);
+}
+
+/// The forward substitution `Uᵀ y = r` on rows `range` (those before it done).
+#[inline(always)]
+fn forward_rows(u: &[Real], w: usize, x: &mut [Real], range: std::ops::Range<usize>) {
+    for i in range {
+        let row = &u[i * w..(i + 1) * w];
         let yi = x[i] / row[0];
         x[i] = yi;
         for (x, &u) in x[i + 1..].iter_mut().zip(&row[1..]) {
             *x -= u * yi;
         }
     }
-    // U x = y.
-    for (i, row) in u.chunks_exact(w).enumerate().rev() {
+}
+
+/// The back substitution `U x = y` on rows `range` (those after it done).
+#[inline(always)]
+fn backward_rows(u: &[Real], w: usize, x: &mut [Real], range: std::ops::Range<usize>) {
+    for i in range.rev() {
+        let row = &u[i * w..(i + 1) * w];
         let (head, tail) = x[i..].split_at_mut(1);
         let s: Real = tail.iter().zip(&row[1..]).map(|(x, &u)| u * x).sum();
         head[0] = (head[0] - s) / row[0];

@@ -74,10 +74,12 @@
 //! unchanged. The energy and gradient stay O(n) (one banded solve with `G`; on a closed
 //! rod a cyclic one, see [`super::gram`]); the Hessian's dense part goes through
 //! Newton's conjugate-gradient correction. Measured (callgrind,
-//! `examples/step_profile.rs`, steps 5–20 005, the window `splinerod bench` times): the
-//! 16-point step costs 126 k instructions against the lumped form's 87 k (1.19 × the
-//! pointwise step #12 was filed against), and about 2 × on long steps from a compressed
-//! start (`ensemble_cables.toml`: 7 conjugate-gradient iterations per Newton iteration).
+//! `examples/step_profile.rs 3000 consistent`, instructions per step): the 16-point step
+//! costs 89.5 k against the lumped form's 50.7 k (125.5 k before its fused pass over the
+//! table, [`super::tabulated`], and the cheaper remainder products and conjugate
+//! gradients, [`super::rows`]; of the difference, 3.3 conjugate-gradient iterations per
+//! step make about 36 k), and about 2 × on long steps from a compressed start
+//! (`ensemble_cables.toml`: 7 conjugate-gradient iterations per Newton iteration).
 //! Made the default for one commit, it cost 1.4–3.5 × across `splinerod bench` (the
 //! ensembles, static Newton, the error estimator, 44 % more memory; figures in
 //! ARCHITECTURE.md), so the lumped form stays the default and
@@ -98,8 +100,8 @@
 //! \\(\\tfrac{EA}{2}\\lVert\\varepsilon - \\Pi\\varepsilon\\rVert^2\\) before it, and it stays
 //! below the pointwise energy (`tests/consistent_gram.rs`).
 
+use super::blocks::{add_outer_products, add_scaled, geometric_tension};
 use super::table::MAX_WIDTH;
-use super::tabulated::{add_outer_products, add_scaled, geometric_tension};
 use super::{tangent, Stretching};
 use nalgebra::Vector3;
 use splinerod_core::bspline::bspline_values;

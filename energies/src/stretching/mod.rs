@@ -29,11 +29,13 @@
 //! degree-`d − 1` splines ([`mixed`]: free of membrane locking), and
 //! [`Stretching::inextensible`] holds that projection at zero ([`multipliers`]).
 
+mod blocks;
 mod gram;
 mod lanes;
 mod mixed;
 mod multipliers;
 mod point_batch;
+mod rows;
 mod seam;
 mod table;
 mod tabulated;

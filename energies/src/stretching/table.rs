@@ -228,6 +228,22 @@ impl TensionTable {
         (j, width): (usize, usize),
         [r, db]: &'a mut [[Vector3<Real>; MAX_WIDTH]; 2],
     ) -> Moment<'a> {
+        let b = self.derivatives_at::<FUSED>(rod, (j, width), r, db);
+        let j = j + 1;
+        self.moment((j, self.first[j - 1]), (b, self.m[j - 1]), &db[..width])
+    }
+
+    /// The strain moment \(b_k\) of function `j + 1`, which touches `width` points (see
+    /// [`Self::moment_at`]), with its derivatives written to `db[..width]` and `q − q₀`
+    /// to `r[..width]` (both at least `width` long).
+    #[inline(always)]
+    pub fn derivatives_at<const FUSED: bool>(
+        &self,
+        rod: &Rod,
+        (j, width): (usize, usize),
+        r: &mut [Vector3<Real>],
+        db: &mut [Vector3<Real>],
+    ) -> Real {
         let first = self.first[j];
         let g = &self.g[j * self.stride..(j + 1) * self.stride];
         let q = &rod.positions[first..first + width];
@@ -237,16 +253,7 @@ impl TensionTable {
             .zip(&db[..width])
             .map(|(r, d)| dot::<FUSED>(r, d))
             .sum();
-        let m = self.m[j];
-        Moment {
-            index: j + 1,
-            first,
-            b: 0.5 * (quad - m),
-            m,
-            db: &db[..width],
-            g,
-            rows: &self.rows,
-        }
+        0.5 * (quad - self.m[j])
     }
 }
 

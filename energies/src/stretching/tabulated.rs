@@ -3,20 +3,122 @@
 //! and tension \\(\\lambda_k\\), the blocks
 //!
 //! \\[ H_{ab} \\mathrel{+}= c_k\\, \\partial_a b_k\\, \\partial_b b_k^T + \\lambda_k (G_k)_{ab}\\, I,
-//! \\qquad g_a \\mathrel{+}= \\lambda_k\\, \\partial_a b_k, \\]
+//! \\qquad g_a \\mathrel{+}= \\lambda_k\\, \\partial_a b_k \\]
 //!
-//! and the block arithmetic the point-by-point sweep ([`super::mixed`]) shares. On an
-//! open rod with the lumped form (each tension from its own moment) one plain pass
-//! does it all ([`Stretching::lumped_derivatives`]); on processors with AVX2 and FMA
-//! that pass runs with fused multiply-adds (detected at run time), its results equal to
-//! round-off (tested in `tests/stretch_table.rs` against the sweep, and below against
-//! the plain pass).
+//! ([`super::blocks`]). On an open rod one plain pass does it all
+//! ([`Stretching::fused_derivatives`]), whatever the tension comes from
+//! ([`TensionSource`]): the lumped form's from each function's own moment, computed in
+//! the pass; the consistent form's from the Gram solve, after the rows of `B` were
+//! computed and kept for the remainder products ([`super::rows`]). On processors with
+//! AVX2 and FMA the pass runs with fused multiply-adds (detected at run time), its
+//! results equal to round-off (tested in `tests/stretch_table.rs` against the sweep,
+//! and below against the plain pass, which is the general pass bit for bit).
 
+use super::blocks::{add_function_blocks, add_scaled, geometric_tension};
+use super::rows::Rows;
 use super::seam;
-use super::table::{add_times, Moment, MAX_WIDTH};
+use super::table::{add_times, Moment, TensionTable, MAX_WIDTH};
 use super::Stretching;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
+
+/// Scratch of a pass: `q − q₀` and `∂b_k` of one function.
+type Scratch = [[Vector3<Real>; MAX_WIDTH]; 2];
+
+/// Where [`Stretching::fused_derivatives`] takes each tension function's moment and
+/// tension from. Its methods are `#[inline(always)]` in both implementations, so that
+/// they compile for the pass's instruction set.
+pub(super) trait TensionSource {
+    /// Number of tension functions, taken by slot `0..count`.
+    fn count(&self) -> usize;
+    /// Control points the function at `slot` touches.
+    fn width(&self, slot: usize) -> usize;
+    /// The [`Moment`] of the function at `slot` (of width `width`, a constant where the
+    /// caller can), products fused with `FUSED`.
+    fn moment<'a, const FUSED: bool>(
+        &'a self,
+        slot: usize,
+        width: usize,
+        scratch: &'a mut Scratch,
+    ) -> Moment<'a>;
+    /// The tension coefficient \\(\\lambda_k\\) of the function of moment `k`.
+    fn tension(&self, k: &Moment<'_>) -> Real;
+}
+
+/// The lumped form's source: the moments from the table at the rod's positions, each
+/// tension \\(\\hat\\lambda_k + EA\\, b_k/m_k\\) from its own moment.
+struct Own<'a> {
+    energy: &'a Stretching,
+    rod: &'a Rod,
+}
+
+impl TensionSource for Own<'_> {
+    #[inline(always)]
+    fn count(&self) -> usize {
+        self.energy.table.functions()
+    }
+
+    #[inline(always)]
+    fn width(&self, slot: usize) -> usize {
+        self.energy.table.width(slot)
+    }
+
+    #[inline(always)]
+    fn moment<'a, const FUSED: bool>(
+        &'a self,
+        slot: usize,
+        width: usize,
+        scratch: &'a mut Scratch,
+    ) -> Moment<'a> {
+        self.energy
+            .table
+            .moment_at::<FUSED>(self.rod, (slot, width), scratch)
+    }
+
+    #[inline(always)]
+    fn tension(&self, k: &Moment<'_>) -> Real {
+        self.energy.tension_of(None, k.index, k.b, k.m)
+    }
+}
+
+/// The consistent form's source: the moments and rows of `B` kept at the rod's
+/// positions, the tensions \\(EA\\, G^{-1} b\\) solved from them.
+pub(super) struct Solved<'a> {
+    table: &'a TensionTable,
+    rows: &'a Rows,
+    /// Per function index: (λ, b), see [`Stretching::with_tensions`].
+    tensions: &'a [(Real, Real)],
+}
+
+impl TensionSource for Solved<'_> {
+    #[inline(always)]
+    fn count(&self) -> usize {
+        self.rows.functions.len()
+    }
+
+    #[inline(always)]
+    fn width(&self, slot: usize) -> usize {
+        self.rows.functions[slot].width
+    }
+
+    #[inline(always)]
+    fn moment<'a, const FUSED: bool>(
+        &'a self,
+        slot: usize,
+        width: usize,
+        _scratch: &'a mut Scratch,
+    ) -> Moment<'a> {
+        let row = &self.rows.functions[slot];
+        let db = self.rows.derivatives(slot, width);
+        self.table
+            .moment((row.index, row.first), (row.b, row.m), db)
+    }
+
+    #[inline(always)]
+    fn tension(&self, k: &Moment<'_>) -> Real {
+        self.tensions[k.index].0
+    }
+}
 
 impl Stretching {
     /// [`Self::mixed_hessian`] from the tabulated integrals ([`super::table`]): per tension
@@ -30,16 +132,37 @@ impl Stretching {
         hessian: &mut BlockBanded,
     ) {
         if self.lumped_open(rod) {
-            #[cfg(target_arch = "x86_64")]
-            if splinerod_core::lanes::wide() {
-                // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-                return unsafe { self.lumped_derivatives_wide(rod, kind, gradient, hessian) };
+            let source = Own { energy: self, rod };
+            return self.fused_derivatives_any(&source, kind, gradient, hessian);
+        }
+        if self.consistent_open(rod) {
+            let mut gradient = gradient;
+            let done = self.with_solved(rod, |source| {
+                let g = gradient.as_deref_mut();
+                self.fused_derivatives_any(source, kind, g, hessian)
+            });
+            if done.is_some() {
+                return;
             }
-            // The same operations as below, in the same order (no merged pairs, no
-            // tension solve on a lumped open rod).
-            return self.lumped_derivatives::<false>(rod, kind, gradient, hessian);
+            return self.general_derivatives(rod, kind, gradient, hessian);
         }
         self.general_derivatives(rod, kind, gradient, hessian);
+    }
+
+    /// Calls `f` with the consistent form's [`Solved`] source at `rod`'s positions
+    /// (the tensions solved, the rows of `B` kept); `None` if the rows are not held
+    /// (they are: the solve fills them).
+    pub(super) fn with_solved<R>(&self, rod: &Rod, f: impl FnOnce(&Solved<'_>) -> R) -> Option<R> {
+        self.with_tensions(rod, |tensions| {
+            self.with_held_rows(rod, |rows| {
+                let table = &self.table;
+                f(&Solved {
+                    table,
+                    rows,
+                    tensions,
+                })
+            })
+        })
     }
 
     /// [`Self::tabulated_derivatives`] in every case: the consistent form's tensions,
@@ -81,248 +204,88 @@ impl Stretching {
         !self.consistent() && !rod.is_closed() && self.table.matches(rod)
     }
 
-    /// [`Self::lumped_derivatives`] with fused products, compiled for AVX2 and FMA (the
-    /// same sums as [`Self::tabulated_derivatives`], each product rounded once).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn lumped_derivatives_wide(
+    /// Whether `rod` takes the consistent form's tabulated derivatives on an open rod
+    /// (no seam), the energy's own table matching it.
+    #[inline]
+    fn consistent_open(&self, rod: &Rod) -> bool {
+        self.consistent() && !rod.is_closed() && self.table.matches(rod)
+    }
+
+    /// [`Self::fused_derivatives`], fused where the processor has AVX2 and FMA.
+    fn fused_derivatives_any<S: TensionSource>(
         &self,
-        rod: &Rod,
+        source: &S,
         kind: HessianKind,
         gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
-        self.lumped_derivatives::<true>(rod, kind, gradient, hessian);
+        #[cfg(target_arch = "x86_64")]
+        if splinerod_core::lanes::wide() {
+            // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+            return unsafe { self.fused_derivatives_wide(source, kind, gradient, hessian) };
+        }
+        // The same operations as the general pass, in the same order (no merged pairs
+        // on an open rod).
+        self.fused_derivatives::<false, S>(source, kind, gradient, hessian);
     }
 
-    /// [`Self::tabulated_derivatives`] where [`Self::lumped_open`] holds: per function
-    /// its tension \\(\\hat\\lambda_k + EA\\, b_k/m_k\\) from its own moment, one pass.
-    /// Plain loops and `#[inline(always)]` callees only, so that all of it is compiled
-    /// for the caller's instruction set (fused multiply-add where `FUSED`).
-    #[inline(always)]
-    fn lumped_derivatives<const FUSED: bool>(
+    /// [`Self::fused_derivatives`] with fused products, compiled for AVX2 and FMA (the
+    /// same sums as [`Self::tabulated_derivatives`], each product rounded once).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn fused_derivatives_wide<S: TensionSource>(
         &self,
-        rod: &Rod,
+        source: &S,
+        kind: HessianKind,
+        gradient: Option<&mut [Vector3<Real>]>,
+        hessian: &mut BlockBanded,
+    ) {
+        self.fused_derivatives::<true, S>(source, kind, gradient, hessian);
+    }
+
+    /// [`Self::tabulated_derivatives`] on an open rod, one pass over the functions of
+    /// `source`. Plain loops and `#[inline(always)]` callees only, so that all of it is
+    /// compiled for the caller's instruction set (fused multiply-add where `FUSED`).
+    #[inline(always)]
+    fn fused_derivatives<const FUSED: bool, S: TensionSource>(
+        &self,
+        source: &S,
         kind: HessianKind,
         mut gradient: Option<&mut [Vector3<Real>]>,
         hessian: &mut BlockBanded,
     ) {
         let mut scratch = [[Vector3::zeros(); MAX_WIDTH]; 2];
-        for j in 0..self.table.functions() {
+        for slot in 0..source.count() {
             let g = gradient.as_deref_mut();
-            match self.table.width(j) {
+            let terms = (kind, slot, &mut scratch);
+            match source.width(slot) {
                 // A cubic's interior functions touch 6 points: with the width a
                 // constant, every loop of their sums unrolls.
-                6 => self.lumped_function::<FUSED, 6>(rod, kind, j, &mut scratch, (g, hessian)),
-                _ => self.lumped_function::<FUSED, 0>(rod, kind, j, &mut scratch, (g, hessian)),
+                6 => self.function_terms::<FUSED, 6, S>(source, terms, (g, hessian)),
+                _ => self.function_terms::<FUSED, 0, S>(source, terms, (g, hessian)),
             }
         }
     }
 
-    /// [`Self::lumped_derivatives`]' terms of function `j + 1`, whose width is `W` (if
-    /// not 0; else the table's), added to the gradient (if any) and the Hessian.
+    /// [`Self::fused_derivatives`]' terms of the function at `slot`, whose width is `W`
+    /// (if not 0; else the source's), added to the gradient (if any) and the Hessian.
     #[inline(always)]
-    fn lumped_function<const FUSED: bool, const W: usize>(
+    fn function_terms<const FUSED: bool, const W: usize, S: TensionSource>(
         &self,
-        rod: &Rod,
-        kind: HessianKind,
-        j: usize,
-        scratch: &mut [[Vector3<Real>; MAX_WIDTH]; 2],
+        source: &S,
+        (kind, slot, scratch): (HessianKind, usize, &mut Scratch),
         (gradient, hessian): (Option<&mut [Vector3<Real>]>, &mut BlockBanded),
     ) {
-        let width = if W > 0 { W } else { self.table.width(j) };
-        let k = self.table.moment_at::<FUSED>(rod, (j, width), scratch);
+        let width = if W > 0 { W } else { source.width(slot) };
+        let k = source.moment::<FUSED>(slot, width, scratch);
         let c = self.lumped_stiffness(k.m);
-        let tension = self.tension_of(None, k.index, k.b, k.m);
+        let tension = source.tension(&k);
         if let Some(g) = gradient {
             for (g, v) in g[k.first..].iter_mut().zip(k.db) {
                 add_times::<FUSED>(g, v, tension);
             }
         }
         add_function_blocks::<FUSED>(hessian, &k, c, geometric_tension(kind, tension));
-    }
-}
-
-/// The tension the geometric stiffness uses: all of it for the exact Hessian, only
-/// its positive part for the definite one.
-#[inline]
-pub(super) fn geometric_tension(kind: HessianKind, tension: Real) -> Real {
-    match kind {
-        HessianKind::Exact => tension,
-        _ => tension.max(0.0),
-    }
-}
-
-/// `gradient[first + a] += tension · db[a]`.
-#[inline]
-pub(super) fn add_scaled(
-    gradient: &mut [Vector3<Real>],
-    first: usize,
-    db: &[Vector3<Real>],
-    tension: Real,
-) {
-    for (g, v) in gradient[first..].iter_mut().zip(db) {
-        *g += v * tension;
-    }
-}
-
-/// Adds one tension function's material and geometric stiffness,
-/// \\(c\\, \\partial b_a \\partial b_b^T + \\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`,
-/// `a ≤ b`, in one pass over its blocks of the band (the same sums, in the same order,
-/// as [`add_outer_products`] then [`add_scaled_identities`], which take a band too
-/// narrow for it).
-/// With `FUSED` (processors with AVX2 and FMA) the blocks are updated in four-wide
-/// registers (`add_function_blocks_wide`).
-#[inline(always)]
-fn add_function_blocks<const FUSED: bool>(
-    hessian: &mut BlockBanded,
-    k: &Moment<'_>,
-    c: Real,
-    lambda: Real,
-) {
-    let v = k.db;
-    if v.len() > hessian.bandwidth() + 1 {
-        add_outer_products(hessian, k.first, c, v);
-        add_scaled_identities(hessian, k, lambda);
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if FUSED {
-        // SAFETY: the fused pass runs only where the processor has AVX2 and FMA
-        // (`Stretching::lumped_derivatives_wide`).
-        unsafe { add_function_blocks_wide(hessian, k, c, lambda) };
-        return;
-    }
-    for (a, va) in v.iter().enumerate() {
-        let u = va * c;
-        let g = &k.g[k.rows[a]..];
-        let row = hessian.band_row_mut(k.first + a);
-        for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
-            // The block summed in registers and stored once (adding `d` to the stored
-            // diagonal would reload entries just stored, and wait on the store).
-            let mut sum = *block;
-            add_rank_one(&mut sum, &u, vb);
-            let d = lambda * gab;
-            let e = sum.as_mut_slice();
-            e[0] += d;
-            e[4] += d;
-            e[8] += d;
-            *block = sum;
-        }
-    }
-}
-
-/// [`add_function_blocks`] fused, a block's columns in four-wide registers
-/// ([`splinerod_core::simd`]): column `c` takes \\(c\\,\\partial_a b\\, (\\partial_b b)_c\\) in
-/// one fused multiply-add, then its diagonal entry \\(\\lambda (G_k)_{ab}\\) (and −0
-/// elsewhere, which leaves every value as it is): the same operations, lane by lane, as
-/// the scalar fused pass.
-///
-/// # Safety
-/// The processor must have AVX2 and FMA; the band must be wide enough for the function.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn add_function_blocks_wide(
-    hessian: &mut BlockBanded,
-    k: &Moment<'_>,
-    c: Real,
-    lambda: Real,
-) {
-    use core::arch::x86_64::*;
-    use splinerod_core::simd::{add_diagonal, load3, load_block, store_block};
-    let v = k.db;
-    // Plain loops, no closures (see `splinerod_core::simd`).
-    for (a, va) in v.iter().enumerate() {
-        let u = _mm256_mul_pd(load3(va.as_ptr()), _mm256_set1_pd(c));
-        let g = &k.g[k.rows[a]..];
-        let row = hessian.band_row_mut(k.first + a);
-        for ((block, vb), &gab) in row.iter_mut().zip(&v[a..]).zip(g) {
-            let p = block.as_mut_ptr();
-            let mut columns = load_block(p);
-            for (column, &vbc) in columns.iter_mut().zip(vb.iter()) {
-                *column = _mm256_fmadd_pd(u, _mm256_set1_pd(vbc), *column);
-            }
-            add_diagonal(&mut columns, lambda * gab);
-            store_block(p, columns);
-        }
-    }
-}
-
-/// Adds \\(\\lambda (G_k)_{ab} I\\) at blocks `(first + a, first + b)`, `a ≤ b`, into the
-/// band (or block by block where it is narrower, see [`add_any`]).
-#[inline]
-fn add_scaled_identities(hessian: &mut BlockBanded, k: &Moment<'_>, lambda: Real) {
-    let width = k.db.len();
-    let wide = width <= hessian.bandwidth() + 1;
-    for a in 0..width {
-        if wide {
-            let row = hessian.band_row_mut(k.first + a);
-            for (b, block) in (a..width).zip(row.iter_mut()) {
-                let g = lambda * k.entry(a, b);
-                block[(0, 0)] += g;
-                block[(1, 1)] += g;
-                block[(2, 2)] += g;
-            }
-        } else {
-            for b in a..width {
-                let block = Matrix3::identity() * (lambda * k.entry(a, b));
-                add_any(hessian, k.first + a, k.first + b, &block);
-            }
-        }
-    }
-}
-
-/// Adds \\(c\\, v_a v_b^T\\) at blocks `(first + a, first + b)` for every pair `a ≤ b` of
-/// `v`: one tension function's material stiffness. Row by row into the band when it is
-/// wide enough (no per-block bounds check), else block by block (far blocks for a matrix
-/// sized narrower, see [`add_any`]).
-#[inline]
-pub(super) fn add_outer_products(
-    hessian: &mut BlockBanded,
-    first: usize,
-    c: Real,
-    v: &[Vector3<Real>],
-) {
-    if v.len() <= hessian.bandwidth() + 1 {
-        for (a, va) in v.iter().enumerate() {
-            let u = va * c;
-            let row = hessian.band_row_mut(first + a);
-            for (block, vb) in row.iter_mut().zip(&v[a..]) {
-                add_rank_one(block, &u, vb);
-            }
-        }
-    } else {
-        for (a, va) in v.iter().enumerate() {
-            let u = va * c;
-            for (b, vb) in v.iter().enumerate().skip(a) {
-                add_any(hessian, first + a, first + b, &(u * vb.transpose()));
-            }
-        }
-    }
-}
-
-/// `block += u vᵀ`, written out (the compiler keeps it in registers; a temporary 3×3
-/// product through nalgebra's operators was measured 2–3 times slower here). The
-/// fused pass does this in four-wide registers instead (`add_function_blocks_wide`).
-#[inline(always)]
-fn add_rank_one(block: &mut Matrix3<Real>, u: &Vector3<Real>, v: &Vector3<Real>) {
-    // Column-major: entry (r, c) at 3c + r.
-    let e = block.as_mut_slice();
-    for (column, &vc) in e.chunks_exact_mut(3).zip(v.iter()) {
-        for (x, &ur) in column.iter_mut().zip(u.iter()) {
-            *x += ur * vc;
-        }
-    }
-}
-
-/// Adds a block inside the band, or as a far block for a matrix sized with a narrower
-/// band than [`crate::Energy::bandwidth`] (a caller that sized it by the degree).
-#[inline]
-fn add_any(hessian: &mut BlockBanded, i: usize, j: usize, block: &Matrix3<Real>) {
-    if j - i <= hessian.bandwidth() {
-        hessian.add_block(i, j, block);
-    } else {
-        hessian.add_coupling(i, j, block);
     }
 }
 
@@ -344,12 +307,13 @@ mod tests {
         (g, h.to_dense())
     }
 
-    #[test]
-    fn the_lumped_pass_is_the_general_one_bit_for_bit_and_fused_to_round_off() {
+    /// Wiggly rods of degrees 2–4, with an energy of stiffness 250 N tabulated for them.
+    fn cases(formulation: super::super::StretchFormulation) -> Vec<(Stretching, Rod)> {
         let material = Material {
             rest_length: 1.0,
             linear_density: 0.1,
         };
+        let mut out = Vec::new();
         for (degree, points) in [(2, 7), (3, 5), (3, 16), (4, 11)] {
             let basis = BSplineSpace::clamped_uniform(degree, points, 1.0).expect("basis");
             let end = Vector3::new(1.1, 0.2, -0.1);
@@ -359,29 +323,75 @@ mod tests {
                 *q += Vector3::new(0.0, 0.03 * (i as Real).sin(), 0.02 * (i as Real).cos());
             }
             let mut e = Stretching::new(250.0).expect("stretching");
+            e.formulation = formulation;
             e.begin_step(&rod, 1e-3).expect("table");
-            assert!(e.lumped_open(&rod));
-            for kind in [HessianKind::Exact, HessianKind::Definite] {
-                let general =
-                    derivatives(&e, &rod, |e, r, g, h| e.general_derivatives(r, kind, g, h));
-                let plain = derivatives(&e, &rod, |e, r, g, h| {
-                    e.lumped_derivatives::<false>(r, kind, g, h)
-                });
-                assert_eq!(general, plain, "degree {degree}, {points} points");
-                #[cfg(target_arch = "x86_64")]
-                if splinerod_core::lanes::wide() {
-                    // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-                    let fused = derivatives(&e, &rod, |e, r, g, h| unsafe {
-                        e.lumped_derivatives_wide(r, kind, g, h)
-                    });
-                    let scale_h = general.1.amax();
-                    assert!((&fused.1 - &general.1).amax() <= 1e-12 * scale_h);
-                    let scale_g = general.0.iter().map(|v| v.amax()).fold(0.0, Real::max);
-                    let gap = fused.0.iter().zip(&general.0).map(|(a, b)| (a - b).amax());
-                    assert!(gap.fold(0.0, Real::max) <= 1e-12 * scale_g);
-                    assert_ne!(fused.1, general.1, "the fused pass rounds differently");
-                }
+            out.push((e, rod));
+        }
+        out
+    }
+
+    /// Checks that `pass` (`true`: fused) gives the general pass's gradient and
+    /// Hessian, bit for bit when plain and to round-off (but not bit for bit) fused.
+    fn check_pass(
+        e: &Stretching,
+        rod: &Rod,
+        pass: impl Fn(bool, HessianKind, Option<&mut [Vector3<Real>]>, &mut BlockBanded),
+    ) {
+        for kind in [HessianKind::Exact, HessianKind::Definite] {
+            let general = derivatives(e, rod, |e, r, g, h| e.general_derivatives(r, kind, g, h));
+            let plain = derivatives(e, rod, |_, _, g, h| pass(false, kind, g, h));
+            assert_eq!(general, plain, "{} points", rod.len());
+            #[cfg(target_arch = "x86_64")]
+            if splinerod_core::lanes::wide() {
+                let fused = derivatives(e, rod, |_, _, g, h| pass(true, kind, g, h));
+                let scale_h = general.1.amax();
+                assert!((&fused.1 - &general.1).amax() <= 1e-12 * scale_h);
+                let scale_g = general.0.iter().map(|v| v.amax()).fold(0.0, Real::max);
+                let gap = fused.0.iter().zip(&general.0).map(|(a, b)| (a - b).amax());
+                assert!(gap.fold(0.0, Real::max) <= 1e-12 * scale_g);
+                assert_ne!(fused.1, general.1, "the fused pass rounds differently");
             }
+        }
+    }
+
+    /// The pass over `source`, fused or plain.
+    fn run<S: TensionSource>(
+        e: &Stretching,
+        source: &S,
+        fused: bool,
+        (kind, g, h): (HessianKind, Option<&mut [Vector3<Real>]>, &mut BlockBanded),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if fused {
+            // SAFETY: only called fused where the processor has AVX2 and FMA.
+            return unsafe { e.fused_derivatives_wide(source, kind, g, h) };
+        }
+        assert!(!fused);
+        e.fused_derivatives::<false, S>(source, kind, g, h);
+    }
+
+    #[test]
+    fn the_lumped_pass_is_the_general_one_bit_for_bit_and_fused_to_round_off() {
+        for (e, rod) in cases(super::super::StretchFormulation::Mixed) {
+            assert!(e.lumped_open(&rod));
+            check_pass(&e, &rod, |fused, kind, g, h| {
+                let source = Own {
+                    energy: &e,
+                    rod: &rod,
+                };
+                run(&e, &source, fused, (kind, g, h));
+            });
+        }
+    }
+
+    #[test]
+    fn the_consistent_pass_is_the_general_one_bit_for_bit_and_fused_to_round_off() {
+        for (e, rod) in cases(super::super::StretchFormulation::MixedConsistent) {
+            assert!(e.consistent_open(&rod));
+            check_pass(&e, &rod, |fused, kind, g, h| {
+                e.with_solved(&rod, |source| run(&e, source, fused, (kind, g, h)))
+                    .expect("rows held");
+            });
         }
     }
 }

@@ -17,16 +17,16 @@
 //! \\[ R = EA\, B^T \left(G^{-1} - \mathrm{diag}(m)^{-1}\right) B \succeq 0, \\]
 //!
 //! is applied to vectors by [`crate::Energy::add_hessian_remainder`] in O(n): one product
-//! with `B`, one banded solve with `G`, one product with \\(B^T\\). Newton's method
+//! with `B`, one banded solve with `G`, one product with \\(B^T\\), the rows of `B` kept
+//! once per state ([`super::rows`]). Newton's method
 //! solves with the banded part factorised and corrects the step by preconditioned
 //! conjugate gradients (`splinerod_integrators::remainder`).
 
 use super::gram::TensionGram;
 use super::seam::Merged;
-use super::table::{Moment, TensionTable, MAX_WIDTH};
+use super::table::{Moment, TensionTable};
 use super::{tangent, Stretching};
-use nalgebra::Vector3;
-use splinerod_core::{Real, Rod, MAX_DEGREE};
+use splinerod_core::{Real, Rod};
 use std::cell::RefCell;
 
 thread_local! {
@@ -37,196 +37,9 @@ thread_local! {
     /// The Gram matrix of a rod the energy's own does not match, and the energy (address)
     /// it was built for.
     static GRAM: RefCell<(usize, TensionGram)> = RefCell::new((0, TensionGram::default()));
-    /// `B = ∂b/∂q` at the state of the last remainder product (see [`Rows`]).
-    static ROWS: RefCell<RowsCache> = RefCell::new(RowsCache::default());
     /// The table of a closed rod the energy's own does not match, and the energy (address)
     /// it was built for.
     static TABLE: RefCell<(usize, TensionTable)> = RefCell::new((0, TensionTable::default()));
-}
-
-/// The rows of `B = ∂b/∂q` at one state, kept between the remainder products of one
-/// Newton step (conjugate gradients apply `R` several times at the same positions). Keyed
-/// by the energy, the rod's topology epoch and its positions (compared bit for bit), so
-/// a product at any other state recomputes them.
-#[derive(Debug, Default)]
-struct Rows {
-    /// The energy (address and stiffness bits), the rod's topology epoch, its number of
-    /// quadrature points, and whether the rows came from the energy's table (a sweep
-    /// differs from it in the last bits, and a table built later for the same epoch
-    /// must not find them).
-    key: Option<(usize, u64, u64, usize, bool)>,
-    positions: Vec<Vector3<Real>>,
-    /// Per tension function: index, first control point, width, weight, moment.
-    functions: Vec<(usize, usize, usize, Real, Real)>,
-    /// `∂b_j/∂q`, `MAX_WIDTH` entries per function.
-    db: Vec<Vector3<Real>>,
-    /// Scratch of the remainder products: `B v`, then `G⁻¹ B v` (per function `0 ..= n`).
-    y: Vec<Real>,
-    /// Scratch of the remainder products: `m⁻¹ B v`.
-    lumped: Vec<Real>,
-    /// A closed rod's distinct control points and degree: its split pairs `j`, `j + m`
-    /// (`1 ≤ j < d`) have one lumped weight ([`super::seam`]).
-    pairs: Option<(usize, usize)>,
-    /// Address of the energy whose slot this is ([`RowsCache`]).
-    owner: usize,
-}
-
-/// The rows of up to [`ROW_SLOTS`] energies (the rods of a joined system each have their
-/// own stretching: one slot would refill at every remainder product), replaced round
-/// robin beyond that.
-#[derive(Debug, Default)]
-struct RowsCache {
-    slots: Vec<Rows>,
-    next: usize,
-}
-
-/// Energies whose rows a thread keeps at once.
-const ROW_SLOTS: usize = 8;
-
-impl RowsCache {
-    /// The slot of `energy`, if it has one.
-    fn find(&self, energy: &Stretching) -> Option<&Rows> {
-        let owner = energy as *const Stretching as usize;
-        self.slots.iter().find(|r| r.owner == owner)
-    }
-
-    /// The rows of `energy` at `rod`'s state, filled if they are not.
-    fn filled(&mut self, energy: &Stretching, rod: &Rod) -> &mut Rows {
-        let owner = energy as *const Stretching as usize;
-        let index = match self.slots.iter().position(|r| r.owner == owner) {
-            Some(i) => i,
-            None if self.slots.len() < ROW_SLOTS => {
-                self.slots.push(Rows::default());
-                self.slots.len() - 1
-            }
-            None => {
-                self.next = (self.next + 1) % ROW_SLOTS;
-                self.next
-            }
-        };
-        let rows = &mut self.slots[index];
-        if !rows.hold(energy, rod) {
-            rows.fill(energy, rod);
-        }
-        rows
-    }
-}
-
-impl Rows {
-    /// Whether the rows are those of `energy` at `rod`'s state.
-    fn hold(&self, energy: &Stretching, rod: &Rod) -> bool {
-        self.key == Some(Self::key_of(energy, rod))
-            && self.positions.len() == rod.len()
-            && self.positions.iter().zip(&rod.positions).all(|(a, b)| {
-                a.iter()
-                    .zip(b.iter())
-                    .all(|(x, y)| x.to_bits() == y.to_bits())
-            })
-    }
-
-    fn key_of(energy: &Stretching, rod: &Rod) -> (usize, u64, u64, usize, bool) {
-        let address = energy as *const Stretching as usize;
-        let points = rod.quadrature().len();
-        (
-            address,
-            energy.stiffness.to_bits(),
-            rod.topology_epoch(),
-            points,
-            energy.table.matches(rod),
-        )
-    }
-
-    /// Recomputes the rows of `energy` at `rod`'s state.
-    fn fill(&mut self, energy: &Stretching, rod: &Rod) {
-        self.key = None;
-        self.owner = energy as *const Stretching as usize;
-        self.functions.clear();
-        self.db.clear();
-        energy.for_each_derivative(rod, |index, first, (m, b), db| {
-            self.functions.push((index, first, db.len(), m, b));
-            let start = self.db.len();
-            self.db.resize(start + MAX_WIDTH, Vector3::zeros());
-            self.db[start..start + db.len()].copy_from_slice(db);
-        });
-        self.positions.clear();
-        self.positions.extend_from_slice(&rod.positions);
-        self.pairs = rod
-            .basis()
-            .periodic_count()
-            .map(|m| (m, rod.basis().degree()));
-        self.key = Some(Self::key_of(energy, rod));
-    }
-
-    /// Calls `f` with every function's [`Moment`] (`table` must be the one the rows
-    /// were computed from).
-    fn for_each_moment(&self, table: &TensionTable, mut f: impl FnMut(&Moment<'_>)) {
-        for (k, &(index, first, width, m, b)) in self.functions.iter().enumerate() {
-            let db = &self.db[k * MAX_WIDTH..k * MAX_WIDTH + width];
-            f(&table.moment((index, first), (b, m), db));
-        }
-    }
-
-    /// `out += c · Bᵀ (G⁻¹ − m⁻¹) B v` with `solve` the solve with `G` (see
-    /// [`Stretching::mixed_remainder`]).
-    fn remainder(
-        &mut self,
-        v: &[Vector3<Real>],
-        c: Real,
-        solve: impl FnOnce(&mut [Real]),
-        out: &mut [Vector3<Real>],
-    ) {
-        let len = self.positions.len() + 1;
-        for buffer in [&mut self.y, &mut self.lumped] {
-            buffer.clear();
-            buffer.resize(len, 0.0);
-        }
-        // y = B v, and its lumped image m⁻¹ B v.
-        let rows = self.db.chunks_exact(MAX_WIDTH);
-        for (&(index, first, width, m, _), db) in self.functions.iter().zip(rows) {
-            let bv: Real = db[..width]
-                .iter()
-                .zip(&v[first..first + width])
-                .map(|(d, v)| d.dot(v))
-                .sum();
-            self.y[index] = bv;
-            self.lumped[index] = if m > 0.0 { bv / m } else { 0.0 };
-        }
-        if let Some((m, d)) = self.pairs {
-            self.merge_pairs(m, d);
-        }
-        solve(&mut self.y);
-        let rows = self.db.chunks_exact(MAX_WIDTH);
-        for (&(index, first, width, _, _), db) in self.functions.iter().zip(rows) {
-            let yi = c * (self.y[index] - self.lumped[index]);
-            for (o, d) in out[first..first + width].iter_mut().zip(&db[..width]) {
-                *o += d * yi;
-            }
-        }
-    }
-}
-
-impl Rows {
-    /// Gives both halves of each split pair the lumped image of the pair,
-    /// \((y_j + y_{j+m}) / (m_j + m_{j+m})\) (`lumped` holding each half's own).
-    fn merge_pairs(&mut self, m: usize, d: usize) {
-        let mut weights = [(0.0, 0.0); MAX_DEGREE];
-        for &(index, _, _, w, _) in &self.functions {
-            let head = if index > m { index - m } else { index };
-            if head >= 1 && head < d {
-                let slot = &mut weights[head - 1];
-                slot.0 += self.y[index];
-                slot.1 += w;
-            }
-        }
-        for (j, &(y, w)) in weights.iter().enumerate().take(d.saturating_sub(1)) {
-            let image = if w > 0.0 { y / w } else { 0.0 };
-            for index in [j + 1, j + 1 + m] {
-                if index < self.lumped.len() {
-                    self.lumped[index] = image;
-                }
-            }
-        }
-    }
 }
 
 impl Stretching {
@@ -277,11 +90,9 @@ impl Stretching {
         moments.resize(rod.len() + 1, (0.0, 0.0));
         if self.consistent() {
             // The rows of B come with the moments; the remainder products reuse them.
-            return ROWS.with(|cache| {
-                let mut cache = cache.borrow_mut();
-                let rows = cache.filled(self, rod);
-                for &(index, _, _, m, b) in &rows.functions {
-                    moments[index] = (b, m);
+            return self.with_rows(rod, |rows| {
+                for row in &rows.functions {
+                    moments[row.index] = (row.b, row.m);
                 }
             });
         }
@@ -308,14 +119,9 @@ impl Stretching {
     pub(super) fn for_each_moment(&self, rod: &Rod, mut f: impl FnMut(&Moment<'_>)) {
         let cached = self.consistent()
             && self.table.matches(rod)
-            && ROWS.with(|cache| {
-                let cache = cache.borrow();
-                let rows = cache.find(self).filter(|rows| rows.hold(self, rod));
-                if let Some(rows) = rows {
-                    rows.for_each_moment(&self.table, &mut f);
-                }
-                rows.is_some()
-            });
+            && self
+                .with_held_rows(rod, |rows| rows.for_each_moment(&self.table, &mut f))
+                .is_some();
         if !cached {
             self.with_table(rod, |table| table.for_each(rod, f));
         }
@@ -350,7 +156,7 @@ impl Stretching {
 
     /// Solves \\(G x = r\\) in place (`r[j]` for function `j = 0 ..= n`) with the energy's
     /// Gram matrix, or one built for `rod` if that does not match it.
-    fn solve_gram(&self, rod: &Rod, r: &mut [Real]) {
+    pub(super) fn solve_gram(&self, rod: &Rod, r: &mut [Real]) {
         if self.gram.matches(rod) {
             return self.gram.solve(r);
         }
@@ -363,44 +169,5 @@ impl Stretching {
             }
             cached.1.solve(r);
         });
-    }
-
-    /// `out += scale · R v` with the remainder `R` of the module docs (nothing for the
-    /// lumped inextensible form).
-    pub(super) fn mixed_remainder(
-        &self,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        if !self.consistent() {
-            return;
-        }
-        ROWS.with(|cache| {
-            let mut cache = cache.borrow_mut();
-            let rows = cache.filled(self, rod);
-            let c = scale * self.stiffness;
-            rows.remainder(v, c, |y| self.solve_gram(rod, y), out);
-        });
-    }
-
-    /// Calls `f(j, first, (m_j, b_j), ∂b_j/∂q_first..)` for every tension function at the
-    /// rod's positions: from the table when it matches, else by a sweep.
-    fn for_each_derivative(
-        &self,
-        rod: &Rod,
-        mut f: impl FnMut(usize, usize, (Real, Real), &[Vector3<Real>]),
-    ) {
-        if self.table.matches(rod) {
-            self.table
-                .for_each(rod, |k| f(k.index, k.first, (k.m, k.b), k.db));
-        } else {
-            self.sweep(rod, |pr| {
-                if pr.width > 0 {
-                    f(pr.index, pr.first, (pr.m, pr.b), &pr.db[..pr.width]);
-                }
-            });
-        }
     }
 }

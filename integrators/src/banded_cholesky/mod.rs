@@ -216,7 +216,9 @@ fn at<const ROWS: bool>(r: usize, c: usize) -> usize {
 }
 
 /// [`solve_blocks`], its products fused with `FUSED`, the off-diagonal blocks row-major
-/// with `ROWS` (the diagonal slots always column-major).
+/// with `ROWS` (the diagonal slots always column-major). The coordinates are read and
+/// written as 3-vectors and each row's blocks by index, so that a row costs little
+/// besides its blocks' products.
 #[inline(always)]
 fn solve_blocks_with<const FUSED: bool, const ROWS: bool>(
     u: &[Matrix3<Real>],
@@ -225,35 +227,41 @@ fn solve_blocks_with<const FUSED: bool, const ROWS: bool>(
     x: &mut [Real],
 ) {
     let w = bw + 1;
+    let x = &mut points(x)[..n];
     // Uᵀ y = b: y_i = U_iiᵀ⁻¹ (b_i − Σ_{k<i} U_kiᵀ y_k).
     for i in 0..n {
-        let (done, rest) = x.split_at_mut(3 * i);
-        let mut r = [rest[0], rest[1], rest[2]];
-        let lo = i.saturating_sub(bw);
-        for (k, y) in (lo..i).zip(done[3 * lo..].chunks_exact(3)) {
+        let mut r = x[i];
+        for k in i.saturating_sub(bw)..i {
             let m = entries(&u[k * w + (i - k)]);
-            let y = [y[0], y[1], y[2]];
+            let y = x[k];
             for (c, r) in r.iter_mut().enumerate() {
                 let column = std::array::from_fn(|t| m[at::<ROWS>(t, c)]);
                 *r = sub_dot::<FUSED>(*r, column, y);
             }
         }
-        rest[..3].copy_from_slice(&lower_product::<FUSED>(&entries(&u[i * w]), r));
+        x[i] = lower_product::<FUSED>(&entries(&u[i * w]), r);
     }
     // U x = y: x_i = U_ii⁻¹ (y_i − Σ_{j>i} U_ij x_j).
     for i in (0..n).rev() {
-        let (head, later) = x.split_at_mut(3 * i + 3);
-        let own = &mut head[3 * i..];
-        let mut r = [own[0], own[1], own[2]];
-        let row = &u[i * w + 1..(i * w + w).min(u.len())];
-        for (block, xj) in row.iter().zip(later[..3 * (n - i - 1)].chunks_exact(3)) {
-            let m = entries(block);
-            let xj = [xj[0], xj[1], xj[2]];
+        let mut r = x[i];
+        for j in i + 1..(i + w).min(n) {
+            let m = entries(&u[i * w + (j - i)]);
+            let xj = x[j];
             for (c, r) in r.iter_mut().enumerate() {
                 let row = std::array::from_fn(|t| m[at::<ROWS>(c, t)]);
                 *r = sub_dot::<FUSED>(*r, row, xj);
             }
         }
-        own.copy_from_slice(&lower_transposed_product::<FUSED>(&entries(&u[i * w]), r));
+        x[i] = lower_transposed_product::<FUSED>(&entries(&u[i * w]), r);
     }
+}
+
+/// Flat coordinates as the 3-vectors of their points (a trailing partial point left
+/// out): `slice::as_chunks_mut`, which the minimum supported Rust version lacks.
+#[inline(always)]
+fn points(x: &mut [Real]) -> &mut [[Real; 3]] {
+    let len = x.len() / 3;
+    // SAFETY: `[Real; 3]` has `Real`'s alignment and no padding, and the first `3 len`
+    // values of `x` are borrowed mutably for the lifetime of the result.
+    unsafe { std::slice::from_raw_parts_mut(x.as_mut_ptr().cast::<[Real; 3]>(), len) }
 }
