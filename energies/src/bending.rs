@@ -5,10 +5,19 @@
 //! E_b = \frac{EI}{2} \int_0^L \kappa^2\, ds. \\]
 //!
 //! **Guard.** \\(|a| \to 0\\) (a collapsed centreline) would divide by zero, so the energy
-//! actually implemented is \\(\kappa^2 = N / (|a|^2 + \delta)^3\\) with
-//! \\(N = |a \times b|^2\\) and \\(\delta =\\) [`STRETCH_FLOOR`] \\(= 10^{-10}\\): a relative
-//! change of at most \\(3\delta\\) near the rest stretch \\(|a| = 1\\), finite everywhere.
-//! Gradient and Hessian are the exact derivatives of this guarded energy.
+//! actually implemented is \\(\kappa^2 = N / g(|a|^2)^3\\) with \\(N = |a \times b|^2\\) and
+//! the metric [`metric`]: \\(g(u) = u + \delta\\), \\(\delta =\\) [`STRETCH_FLOOR`]
+//! \\(= 10^{-10}\\) (a relative change of at most \\(3\delta\\) near the rest stretch
+//! \\(|a| = 1\\)), and below \\(u = 2f\\), \\(f =\\) [`FOLD_FLOOR`] (a centreline squeezed
+//! below a tenth of its rest speed), a cubic that meets it there with two derivatives
+//! and stays above \\(2f/3\\). Without that floor a rod squeezed to a point (a
+//! Green–Lagrange rod compressed past a stretch of \\(1/\sqrt3\\) collapses along its axis)
+//! had curvature stiffnesses of order \\(|a|^{-6} \sim 10^{30}\\) and no Newton solve
+//! converged there, at any step (issue #44: rods with bending released compressed by
+//! 50–90 %); with it every step does, and nothing changes above \\(|a| = 0.1\\).
+//! Gradient and Hessian are the exact derivatives of this guarded energy (with
+//! \\(h_a = -6 g^{-4} g' a\\) and \\(h_{aa} = -6 g^{-4} g' I + (48 g^{-5} g'^2 - 12 g^{-4}
+//! g'') a a^T\\); \\(g' = 1, g'' = 0\\) above the floor).
 //!
 //! **Derivatives.** With \\(g = |a|^2 + \delta\\), \\(h = g^{-3}\\) and
 //! \\(N = |a|^2 |b|^2 - (a\cdot b)^2\\):
@@ -62,6 +71,27 @@ use splinerod_core::{BlockBanded, CoreError, HessianKind, QuadPoint, Real, Rod};
 
 /// Regularisation δ of \\(|C'|^2\\) in the curvature's denominator (dimensionless).
 pub const STRETCH_FLOOR: Real = 1e-10;
+
+/// Below \\(|C'|^2 = 2 f\\) (a centreline squeezed below a tenth of its rest speed),
+/// the curvature's denominator uses a floored metric (see [`metric`]), `f` this value.
+pub const FOLD_FLOOR: Real = 5e-3;
+
+/// The guarded metric \\(g(u)\\) of \\(u = |C'|^2\\) and its first two derivatives:
+/// \\(u + \delta\\) for \\(u \ge 2f\\), and below it the cubic
+/// \\(p(u) = \tfrac{2f}{3} + \tfrac{u^2}{2f} - \tfrac{u^3}{12 f^2} + \delta\\), which
+/// meets \\(u + \delta\\) at \\(2f\\) with equal first and second derivatives, rises
+/// monotonically from \\(2f/3\\) and is flat at \\(u = 0\\).
+#[inline]
+pub(crate) fn metric(u: Real) -> (Real, Real, Real) {
+    let f = FOLD_FLOOR;
+    if u >= 2.0 * f {
+        return (u + STRETCH_FLOOR, 1.0, 0.0);
+    }
+    let g = 2.0 * f / 3.0 + u * u / (2.0 * f) - u * u * u / (12.0 * f * f) + STRETCH_FLOOR;
+    let g1 = u / f - u * u / (4.0 * f * f);
+    let g2 = 1.0 / f - u / (2.0 * f * f);
+    (g, g1, g2)
+}
 
 /// Bending energy with bending stiffness `EI` (N·m²), exact nonlinear curvature.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -165,20 +195,20 @@ fn derivatives(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> (Vector3<Real
 /// Guarded \\(\kappa^2 = |a \times b|^2 / (|a|^2 + \delta)^3\\).
 #[inline]
 fn kappa_squared(a: &Vector3<Real>, b: &Vector3<Real>) -> Real {
-    let g = a.norm_squared() + STRETCH_FLOOR;
+    let (g, _, _) = metric(a.norm_squared());
     a.cross(b).norm_squared() / (g * g * g)
 }
 
 /// κ² and its first derivatives with respect to `a` and `b`.
 #[inline]
 fn density(a: &Vector3<Real>, b: &Vector3<Real>) -> Density {
-    let g = a.norm_squared() + STRETCH_FLOOR;
+    let (g, g1, _) = metric(a.norm_squared());
     let h = 1.0 / (g * g * g);
     let n = a.cross(b).norm_squared();
     let ab = a.dot(b);
     let na = a * (2.0 * b.norm_squared()) - b * (2.0 * ab);
     let nb = b * (2.0 * a.norm_squared()) - a * (2.0 * ab);
-    let ha = a * (-6.0 * h / g);
+    let ha = a * (-6.0 * h * g1 / g);
     Density {
         fa: na * h + ha * n,
         fb: nb * h,
@@ -189,14 +219,15 @@ fn density(a: &Vector3<Real>, b: &Vector3<Real>) -> Density {
 /// `(a, b)` (module docs), entry by entry: each entry is computed by the operations of
 /// the matrix expressions of the docs, in their order, without the 3×3 temporaries.
 fn density_blocks(a: &Vector3<Real>, b: &Vector3<Real>) -> [Entries; 3] {
-    let g = a.norm_squared() + STRETCH_FLOOR;
+    let (g, g1, g2) = metric(a.norm_squared());
     let h = 1.0 / (g * g * g);
     let (a2, b2, ab) = (a.norm_squared(), b.norm_squared(), a.dot(b));
     let n = a.cross(b).norm_squared();
     let na = a * (2.0 * b2) - b * (2.0 * ab);
     let nb = b * (2.0 * a2) - a * (2.0 * ab);
-    let ha = a * (-6.0 * h / g);
-    let (haa_id, haa_aa, nab_id) = (-6.0 * h / g, 48.0 * h / (g * g), 2.0 * ab);
+    let ha = a * (-6.0 * h * g1 / g);
+    let haa_aa = 48.0 * h * g1 * g1 / (g * g) - 12.0 * h * g2 / g;
+    let (haa_id, nab_id) = (-6.0 * h * g1 / g, 2.0 * ab);
     const IDENTITY: Entries = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
     let mut out = [[0.0; 9]; 3];
     for (e, &id) in IDENTITY.iter().enumerate() {

@@ -8,7 +8,7 @@
 //! each lane has its own `EI`. Each lane's result equals [`Bending`]'s own evaluation up
 //! to round-off (tested in [`crate::lanes`]).
 
-use super::{Bending, STRETCH_FLOOR};
+use super::{metric, Bending};
 use crate::lanes::{LaneField, LaneTerm};
 use splinerod_core::lanes::{fma, ZERO};
 use splinerod_core::{Derivatives, LaneBand, Lanes, QuadPoint, QuadratureTable, Real, Rod, LANES};
@@ -159,8 +159,12 @@ struct Point {
     ab: Lanes,
     /// \\(|a \times b|^2\\).
     n: Lanes,
-    /// \\(g = |a|^2 + \delta\\).
+    /// \\(g = |a|^2 + \delta\\) ([`metric`]).
     g: Lanes,
+    /// \\(g'\\) and \\(g''\\) with respect to \\(|a|^2\\) (1 and 0 unless the
+    /// centreline is squeezed below [`super::FOLD_FLOOR`]).
+    g1: Lanes,
+    g2: Lanes,
     /// \\(g^{-3}\\).
     h: Lanes,
 }
@@ -185,13 +189,16 @@ impl Point {
             let (i, j) = ((c + 1) % 3, (c + 2) % 3);
             std::array::from_fn(|l| a[i][l] * b[j][l] - a[j][l] * b[i][l])
         });
-        let g: Lanes = a2.map(|x| x + STRETCH_FLOOR);
+        let m = a2.map(metric);
+        let g: Lanes = m.map(|m| m.0);
         Self {
             a2,
             b2,
             ab,
             n: dot(&cross, &cross),
             g,
+            g1: m.map(|m| m.1),
+            g2: m.map(|m| m.2),
             h: g.map(|g| 1.0 / (g * g * g)),
         }
     }
@@ -203,7 +210,7 @@ impl Point {
             std::array::from_fn(|l| a[c][l] * (2.0 * self.b2[l]) - b[c][l] * (2.0 * self.ab[l]))
         });
         let ha = std::array::from_fn(|c| {
-            std::array::from_fn(|l| a[c][l] * (-6.0 * self.h[l] / self.g[l]))
+            std::array::from_fn(|l| a[c][l] * (-6.0 * self.h[l] * self.g1[l] / self.g[l]))
         });
         (na, ha)
     }
@@ -234,8 +241,10 @@ impl Point {
         let (na, ha) = self.na_ha(a, b);
         let nb = self.nb(a, b);
         let (h, g, n) = (self.h, self.g, self.n);
-        let haa_id = lanes(|l| -6.0 * h[l] / g[l]);
-        let haa_aa = lanes(|l| 48.0 * h[l] / (g[l] * g[l]));
+        let (g1, g2) = (self.g1, self.g2);
+        let haa_id = lanes(|l| -6.0 * h[l] * g1[l] / g[l]);
+        let haa_aa =
+            lanes(|l| 48.0 * h[l] * g1[l] * g1[l] / (g[l] * g[l]) - 12.0 * h[l] * g2[l] / g[l]);
         let mut out = [[ZERO; 9]; 4];
         for e in 0..9 {
             let (r, c) = (e % 3, e / 3);

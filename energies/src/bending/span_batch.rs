@@ -193,7 +193,7 @@ fn entries(m: &Matrix3<Real>) -> Entries {
 #[cfg(test)]
 mod tests {
     use super::super::{
-        clamp_psd, density, density_hessian, derivatives, symmetric6, Bending, STRETCH_FLOOR,
+        clamp_psd, density, density_hessian, derivatives, metric, symmetric6, Bending,
     };
     use crate::Energy;
     use nalgebra::{Matrix3, Matrix6, Vector3};
@@ -247,7 +247,7 @@ mod tests {
     /// The density Hessian through nalgebra's 3×3 expressions (the form before
     /// [`super::super::density_blocks`] wrote it out).
     fn density_hessian_reference(a: &Vector3<Real>, b: &Vector3<Real>) -> Matrix6<Real> {
-        let g = a.norm_squared() + STRETCH_FLOOR;
+        let (g, g1, g2) = metric(a.norm_squared());
         let h = 1.0 / (g * g * g);
         let (a2, b2, ab) = (a.norm_squared(), b.norm_squared(), a.dot(b));
         let n = a.cross(b).norm_squared();
@@ -257,8 +257,9 @@ mod tests {
         let naa = (id * b2 - b * b.transpose()) * 2.0;
         let nbb = (id * a2 - a * a.transpose()) * 2.0;
         let nab = a * b.transpose() * 4.0 - b * a.transpose() * 2.0 - id * (2.0 * ab);
-        let ha = a * (-6.0 * h / g);
-        let haa = id * (-6.0 * h / g) + a * a.transpose() * (48.0 * h / (g * g));
+        let ha = a * (-6.0 * h * g1 / g);
+        let haa = id * (-6.0 * h * g1 / g)
+            + a * a.transpose() * (48.0 * h * g1 * g1 / (g * g) - 12.0 * h * g2 / g);
         let faa = naa * h + na * ha.transpose() + ha * na.transpose() + haa * n;
         let fab = nab * h + ha * nb.transpose();
         let fbb = nbb * h;
