@@ -157,6 +157,14 @@ pub trait Energy: Send + Sync {
         0.0
     }
 
+    /// Scales the energy's stiffness to `scale` times its own (`1` restores it exactly),
+    /// for a static solver's continuation from a soft rod to the real one; returns
+    /// whether the energy has such a stiffness (the default: no, and nothing changes).
+    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
+        let _ = scale;
+        false
+    }
+
     /// Block bandwidth of the Hessian: the largest distance between two control points
     /// the energy couples (the degree `d` by default: integrals of the curve and its
     /// derivatives couple control points that share a span).

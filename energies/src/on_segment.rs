@@ -233,6 +233,10 @@ impl Energy for OnSegment {
         }
     }
 
+    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
+        self.inner.set_stiffness_scale(scale)
+    }
+
     fn bandwidth(&self, rod: &Rod) -> usize {
         let d = rod.basis().degree();
         self.with(rod, d, |local| self.inner.bandwidth(&local.rod))

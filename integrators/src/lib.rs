@@ -110,6 +110,14 @@ pub trait System: Send + Sync {
     fn admissible(&self) -> bool {
         true
     }
+    /// Scales the stiffness of every energy that has one to `scale` times its own (`1`
+    /// restores it exactly): the static solver's continuation from a soft rod to the
+    /// real one ([`crate::statics`]). Returns whether anything was scaled (the default:
+    /// no).
+    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
+        let _ = scale;
+        false
+    }
     /// One multiplier update of every constraint held by multipliers (the inextensible
     /// rod), `stiffen`ing penalties that fall too slowly; the largest violation before
     /// it. Default: no constraints, 0.

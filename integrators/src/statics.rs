@@ -73,6 +73,27 @@ impl Default for StaticParams {
 /// on a 0.5 m high arch that membrane locking makes stable; limited, on the catenary).
 const STEP_LIMIT: Real = 0.1;
 
+/// Stiffness continuation (module docs): the first stage softens the rod's stiffness by
+/// this factor, then by its square, … .
+const SOFTENING: Real = 1e-2;
+
+/// Stiffness continuation: the most softenings tried for the first stage (down to
+/// `SOFTENING⁵ = 1e-10` of the stiffness).
+const MAX_SOFTENINGS: usize = 5;
+
+/// Stiffness continuation: the factor from one stage's stiffness to the next.
+const STIFFENING: Real = 10.0;
+
+/// Stiffness continuation: after failed stages the factor is square-rooted down to this,
+/// below which the continuation gives up.
+const MIN_STIFFENING: Real = 1.2;
+
+/// Newton iterations a stage of the stiffness continuation may take.
+const STAGE_ITERATIONS: usize = 50;
+
+/// Pseudo-transient steps a stage of the stiffness continuation may take.
+const STAGE_CONTINUATION_STEPS: usize = 10;
+
 /// Most pushes off unstable equilibria in one solve.
 const MAX_SADDLE_ESCAPES: usize = 10;
 
@@ -143,12 +164,91 @@ impl StaticSolver {
             Ok(true) => Ok(()),
             _ if recoverable && self.params.max_continuation_steps > 0 => {
                 system.rod_mut().positions.clone_from(&start);
+                if self.soften_and_stiffen(system, total)? {
+                    return Ok(());
+                }
+                system.rod_mut().positions.clone_from(&start);
                 self.continuation(system, total)
             }
             Ok(false) => Err(IntegratorError::NotConverged {
                 iterations: total.newton_iterations,
                 residual: total.residual,
             }),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The stiffness continuation of the module docs from the rod's positions: the
+    /// equilibrium of a rod softened by [`SOFTENING`], [`SOFTENING`]², … (the first that
+    /// Newton, or a short pseudo-transient path, reaches from the start), then of stiffer
+    /// rods, ×[`STIFFENING`] at a time (×√[`STIFFENING`] after a failed stage), each from
+    /// the last, up to the rod itself. `Ok(false)` (the rod's stiffness restored, its
+    /// positions left anywhere) if the system has no stiffness to scale or no stage
+    /// succeeded.
+    fn soften_and_stiffen(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<bool, IntegratorError> {
+        if !system.set_stiffness_scale(1.0) {
+            return Ok(false);
+        }
+        let start = system.rod().positions.clone();
+        let mut scale = 1.0;
+        let mut found = false;
+        for _ in 0..MAX_SOFTENINGS {
+            scale *= SOFTENING;
+            system.set_stiffness_scale(scale);
+            system.rod_mut().positions.clone_from(&start);
+            if self.stage(system, total)? {
+                found = true;
+                break;
+            }
+        }
+        let mut factor = STIFFENING;
+        while found && scale < 1.0 {
+            let next = (scale * factor).min(1.0);
+            let before = system.rod().positions.clone();
+            system.set_stiffness_scale(next);
+            if self.stage(system, total)? {
+                scale = next;
+                factor = STIFFENING;
+            } else if factor > MIN_STIFFENING {
+                system.rod_mut().positions.clone_from(&before);
+                factor = factor.sqrt();
+            } else {
+                found = false;
+            }
+        }
+        system.set_stiffness_scale(1.0);
+        Ok(found)
+    }
+
+    /// One stage of [`Self::soften_and_stiffen`]: Newton, then a short pseudo-transient
+    /// path if it fails; whether an equilibrium was reached.
+    fn stage(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<bool, IntegratorError> {
+        let here = system.rod().positions.clone();
+        match self.newton(
+            system,
+            STAGE_ITERATIONS.min(self.params.max_iterations),
+            total,
+        ) {
+            Ok(true) => return Ok(true),
+            Err(e) if !e.is_recoverable() => return Err(e),
+            _ => {}
+        }
+        system.rod_mut().positions.clone_from(&here);
+        let steps = self
+            .params
+            .max_continuation_steps
+            .min(STAGE_CONTINUATION_STEPS);
+        match self.continuation_for(system, total, steps) {
+            Ok(()) => Ok(true),
+            Err(e) if e.is_recoverable() => Ok(false),
             Err(e) => Err(e),
         }
     }
@@ -274,6 +374,16 @@ impl StaticSolver {
         system: &mut dyn System,
         total: &mut StepStats,
     ) -> Result<(), IntegratorError> {
+        self.continuation_for(system, total, self.params.max_continuation_steps)
+    }
+
+    /// [`Self::continuation`] of at most `steps` steps.
+    fn continuation_for(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+        steps: usize,
+    ) -> Result<(), IntegratorError> {
         let mut h = shortest_period(system, &mut self.workspace);
         let pseudo = NewtonParams {
             max_iterations: 20,
@@ -283,7 +393,7 @@ impl StaticSolver {
         };
         let mut point = system.rod().positions.clone();
         self.stepper.definite_only = true;
-        for _ in 0..self.params.max_continuation_steps {
+        for _ in 0..steps {
             system.rod_mut().velocities.fill(Vector3::zeros());
             self.stepper.begin(system, h)?;
             let step = Increment { beta: h, reach: h };

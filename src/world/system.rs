@@ -356,4 +356,11 @@ impl System for RodSystem {
     fn update_multipliers(&mut self, stiffen: bool) -> Real {
         RodSystem::update_multipliers(self, stiffen)
     }
+    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
+        let mut any = false;
+        for e in self.energies.iter_mut() {
+            any |= e.set_stiffness_scale(scale);
+        }
+        any
+    }
 }
