@@ -94,7 +94,7 @@ pub fn add_lanes(
                     *slot = m;
                 }
             }
-            crate::stretching::add_moment_lanes(moments, q, energy, derivatives);
+            return crate::stretching::add_moment_lanes(moments, q, energy, derivatives);
         }
         LaneTerm::Bending(first) => {
             let mut bending = [first; LANES];
@@ -155,8 +155,10 @@ mod tests {
     use crate::{Bending, Energy, Gravity, Stretching};
     use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, LaneBand, Material, Rod};
 
-    /// Four rods of one basis, bent and stretched differently.
-    fn rods(degree: usize) -> Vec<Rod> {
+    /// Four rods of one basis, bent and stretched differently (`wiggle` scales the
+    /// bends: at 1 the strain varies inside the spans by more than the mixed forms'
+    /// projection guard allows, at 0.05 it does not).
+    fn wiggly_rods(degree: usize, wiggle: Real) -> Vec<Rod> {
         (0..LANES)
             .map(|l| {
                 let material = Material {
@@ -170,11 +172,17 @@ mod tests {
                 for (i, p) in rod.positions.iter_mut().enumerate() {
                     let t = (i * 7 + l * 3) as Real;
                     *p = *p * (1.1 + 0.05 * l as Real)
-                        + Vector3::new(0.01 * t.sin(), 0.05 * (0.3 * t).cos(), 0.02 * t.cos());
+                        + Vector3::new(0.01 * t.sin(), 0.05 * (0.3 * t).cos(), 0.02 * t.cos())
+                            * wiggle;
                 }
                 rod
             })
             .collect()
+    }
+
+    /// The rods of [`wiggly_rods`].
+    fn rods(degree: usize) -> Vec<Rod> {
+        wiggly_rods(degree, 1.0)
     }
 
     /// Lane evaluation of one energy per rod against each energy's own.
@@ -261,6 +269,43 @@ mod tests {
                 .collect();
             check(&rods, &bending);
         }
+    }
+
+    /// Where the projection guard acts on a lane's rod, the lanes refuse (the member
+    /// is stepped alone) instead of leaving it out.
+    #[test]
+    fn the_lanes_refuse_rods_where_the_projection_guard_acts() {
+        let rods = wiggly_rods(3, 1.0);
+        let energies: Vec<Stretching> = rods
+            .iter()
+            .map(|rod| {
+                let mut s = Stretching::new(80.0).expect("stretching");
+                s.guard = true;
+                s.begin_step(rod, 1e-3).expect("table");
+                s
+            })
+            .collect();
+        let terms: [LaneTerm<'_>; LANES] =
+            std::array::from_fn(|l| energies[l].lane_term(&rods[l]).expect("lane form"));
+        let n = rods[0].len();
+        let q: Vec<Lanes> = (0..3 * n)
+            .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
+            .collect();
+        let mut energy = [0.0; LANES];
+        assert!(!add_lanes(&terms, &q, &mut energy, None));
+        assert_eq!(energy, [0.0; LANES], "nothing added");
+        // With gentler bends the guard is idle and the lanes take the rods.
+        let rods = wiggly_rods(3, 0.05);
+        let energies: Vec<Box<dyn Energy>> = rods
+            .iter()
+            .map(|rod| {
+                let mut s = Stretching::new(80.0).expect("stretching");
+                s.guard = true;
+                s.begin_step(rod, 1e-3).expect("table");
+                Box::new(s) as Box<dyn Energy>
+            })
+            .collect();
+        check(&rods, &energies);
     }
 
     #[test]

@@ -7,7 +7,7 @@ use super::table::TensionTable;
 use super::Stretching;
 use crate::lanes::{LaneField, LaneTerm};
 use splinerod_core::lanes::{fma, sub, ZERO};
-use splinerod_core::{Derivatives, LaneBand, Lanes, Real, Rod, LANES};
+use splinerod_core::{Derivatives, LaneBand, Lanes, QuadratureTable, Real, Rod, LANES};
 
 /// Widest function block a lane evaluation takes: `2d` for degree 5.
 const MAX_LANE_WIDTH: usize = 10;
@@ -22,6 +22,10 @@ pub struct MomentTerm<'a> {
     stiffness: Real,
     /// \\(\hat\lambda_j\\) by function index (empty: none).
     multipliers: &'a [Real],
+    /// The rod's quadrature, for the projection guard's test ([`guard_is_idle`]);
+    /// `None`: the rod has no guard (not asked for, or inextensible). The lanes' rods share their knots,
+    /// so lane 0's serves all.
+    quadrature: Option<&'a QuadratureTable>,
 }
 
 impl MomentTerm<'_> {
@@ -45,33 +49,93 @@ impl MomentTerm<'_> {
 impl Stretching {
     /// The lane term of this energy on `rod`: the lumped mixed form on an open rod whose
     /// table is current (after [`crate::Energy::begin_step`]); `None` otherwise.
-    pub(super) fn moment_term(&self, rod: &Rod) -> Option<LaneTerm<'_>> {
+    /// A rod with a rest curve has none: the guard's test ([`guard_is_idle`]) assumes
+    /// unit rest speed.
+    pub(super) fn moment_term<'a>(&'a self, rod: &'a Rod) -> Option<LaneTerm<'a>> {
         let lumped = self.formulation == super::StretchFormulation::Mixed;
-        if !lumped || rod.is_closed() || !self.table.matches(rod) {
+        if !lumped || rod.is_closed() || !self.table.matches(rod) || self.rest.is_some() {
             return None;
         }
+        let guarded = self.guard && self.multipliers.is_none();
         Some(LaneTerm::Moments(MomentTerm {
             table: &self.table,
             stiffness: self.axial_stiffness(),
             multipliers: self.multipliers.as_ref().map_or(&[][..], |m| &m.values),
+            quadrature: guarded.then(|| rod.quadrature()),
         }))
     }
 }
 
-/// [`crate::lanes::add_lanes`] for the moment terms `terms` (checked compatible).
+/// [`crate::lanes::add_lanes`] for the moment terms `terms` (checked compatible);
+/// false, adding nothing, where a lane's projection guard would act
+/// ([`guard_is_idle`]): the lanes do not replicate it.
 pub(crate) fn add_moment_lanes(
     terms: [&MomentTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
     derivatives: Option<Derivatives<'_>>,
-) {
+) -> bool {
+    if !guard_is_idle(terms[0], q) {
+        return false;
+    }
     #[cfg(target_arch = "x86_64")]
     if splinerod_core::lanes::wide() {
         // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-        return unsafe { moments_wide(terms, q, energy, derivatives) };
+        unsafe { moments_wide(terms, q, energy, derivatives) };
+        return true;
     }
     moments::<false>(terms, q, energy, derivatives);
+    true
 }
+
+/// Whether the guard ([`super::guard`]) is idle on every lane's rod: on each knot span,
+/// every quadrature point's strain within [`super::GUARD_DEVIATION`] of the span's
+/// weighted mean, each lane's \\(C'\\) from the shared table (a dozen multiply-adds per
+/// point and lane). Where it is not, the lanes' potential reports that it cannot
+/// replicate the members (their step is taken alone).
+fn guard_is_idle(term: &MomentTerm<'_>, q: &LaneField) -> bool {
+    let Some(table) = term.quadrature else {
+        return true;
+    };
+    let mut points = table.walk().peekable();
+    let mut strains = [[0.0; LANES]; MAX_SPAN_POINTS];
+    let mut weights = [0.0; MAX_SPAN_POINTS];
+    while let Some(head) = points.peek() {
+        let first = head.first;
+        let mut count = 0;
+        while let Some(qp) = points.next_if(|p| p.first == first) {
+            if count == MAX_SPAN_POINTS {
+                return false;
+            }
+            let mut c1 = [ZERO; 3];
+            for (a, &w) in qp.d1.iter().enumerate() {
+                for (c, sum) in c1.iter_mut().enumerate() {
+                    let x = &q[3 * (qp.first + a) + c];
+                    (0..LANES).for_each(|l| sum[l] += w * x[l]);
+                }
+            }
+            strains[count] = std::array::from_fn(|l| {
+                0.5 * (c1[0][l] * c1[0][l] + c1[1][l] * c1[1][l] + c1[2][l] * c1[2][l] - 1.0)
+            });
+            weights[count] = qp.weight;
+            count += 1;
+        }
+        let total: Real = weights[..count].iter().sum();
+        for l in 0..LANES {
+            let mean = (0..count).map(|p| weights[p] * strains[p][l]).sum::<Real>() / total;
+            if strains[..count]
+                .iter()
+                .any(|e| (e[l] - mean).abs() > super::GUARD_DEVIATION)
+            {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// Quadrature points per span the lanes' guard test takes (more: stepped alone).
+const MAX_SPAN_POINTS: usize = 16;
 
 /// [`moments`] compiled for AVX2 with fused multiply-add (four lanes per instruction
 /// instead of two, one instruction per multiply-add).

@@ -31,6 +31,7 @@
 
 mod blocks;
 mod gram;
+mod guard;
 mod lanes;
 mod mixed;
 mod multipliers;
@@ -41,11 +42,13 @@ mod table;
 mod tabulated;
 mod tensions;
 
+pub use guard::GUARD_DEVIATION;
 pub(crate) use lanes::add_moment_lanes;
 pub use lanes::MomentTerm;
 pub use multipliers::Multipliers;
 
 use crate::Energy;
+use guard::GuardSums;
 use nalgebra::{Matrix3, Vector3};
 use point_batch::{PointBatch, Sums};
 use splinerod_core::{
@@ -73,7 +76,71 @@ pub enum StretchFormulation {
     MixedConsistent,
 }
 
+/// The lumped form's extra error on a rod whose strain varies on the scale `ε` is about
+/// this times `ε L / n²` (m; measured on the catenary, L = 1 m, EA = 100 N: 2.7e-6 m at
+/// 32 points above the consistent form's error).
+pub const AUTO_LUMPING_ERROR: Real = 0.27;
+
+/// The discretisation error left at O(h⁴) is about this times `L / n⁴` (m; the same
+/// measurements, four catenary shapes, EA 10² – 10⁹ N, 16 – 64 points:
+/// `cargo run --release --example form_study`).
+pub const AUTO_RESOLUTION_ERROR: Real = 0.011;
+
+/// Compression (strain) of the start beyond which [`StretchFormulation::auto`] takes
+/// the consistent form whatever the errors: the lumped projection leaves the shortest
+/// axial waves a stiffness of about an eighth of the pointwise one, which a compressive
+/// strain beyond about 12 % turns negative (a spurious zig-zag mode grows); the
+/// consistent form is stable down to the Green–Lagrange material's own limit (stretch
+/// 1/√3).
+pub const AUTO_COMPRESSION: Real = 0.05;
+
+/// What [`StretchFormulation::auto`] decides from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AutoInputs {
+    /// The strain scale the loads, the pins and the start put on the rod (≥ 0).
+    pub strain: Real,
+    /// The largest compression of the start (≥ 0).
+    pub compression: Real,
+    /// The most control points the rod will have.
+    pub control_points: usize,
+    /// Rest length, m.
+    pub length: Real,
+    /// The error the rest of the model allows anyway, m (a contact's onset layer, an
+    /// adaptive run's tolerance; 0 if none).
+    pub model_error: Real,
+}
+
 impl StretchFormulation {
+    /// The form a scene's `"auto"` resolves to: [`Self::MixedConsistent`] where the
+    /// lumped form's extra error, [`AUTO_LUMPING_ERROR`]` · ε L / n²`, would pass half
+    /// of what the run allows anyway — the larger of the resolution's own error
+    /// ([`AUTO_RESOLUTION_ERROR`]` · L / n⁴`) and `model_error` — or where the start is
+    /// compressed beyond [`AUTO_COMPRESSION`]; else [`Self::Mixed`]. On stiff rods the
+    /// two agree (the lumped Gram matrix enters only the constitutive relation, which
+    /// the constraints make irrelevant there) and the lumped form needs no conjugate
+    /// gradients. The pointwise form is never chosen: it locks on stiff rods and is at
+    /// best as accurate as the consistent form on stretchy ones.
+    pub fn auto(inputs: AutoInputs) -> Self {
+        let n = inputs.control_points.max(1) as Real;
+        let lumping = AUTO_LUMPING_ERROR * inputs.strain * inputs.length / (n * n);
+        let resolution = AUTO_RESOLUTION_ERROR * inputs.length / (n * n * n * n);
+        let allowed = resolution.max(inputs.model_error);
+        if lumping > 0.5 * allowed || inputs.compression > AUTO_COMPRESSION {
+            Self::MixedConsistent
+        } else {
+            Self::Mixed
+        }
+    }
+
+    /// The scene name of the form (`"mixed"`, `"pointwise"`, `"mixed-consistent"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mixed => "mixed",
+            Self::Pointwise => "pointwise",
+            Self::MixedConsistent => "mixed-consistent",
+        }
+    }
+
     /// Gauss points per knot span that integrate this form's integrands (constant rest
     /// metric) and the mass matrix exactly for degree `d`: the mixed form's are
     /// polynomials of degree `3(d − 1)`, the pointwise form's of degree `4(d − 1)`.
@@ -97,7 +164,13 @@ pub struct Stretching {
     /// For an inextensible rod ([`Stretching::inextensible`]): the constraints'
     /// multipliers; their penalty then takes the place of `stiffness`.
     pub multipliers: Option<Multipliers>,
+    /// The projection guard of the mixed forms ([`guard`]): stiffen where the strain
+    /// varies inside a knot span by more than [`GUARD_DEVIATION`]. Off by default;
+    /// scenes with contact turn it on.
+    pub guard: bool,
     rest: Option<RestMetric>,
+    /// `stiffness` before [`Energy::set_stiffness_scale`] scaled it (`None`: unscaled).
+    unscaled: Option<Real>,
     /// The mixed form's integrals for the rod's current basis ([`table`]).
     table: table::TensionTable,
     /// The tension functions' Gram matrix for the rod's current basis ([`gram`]).
@@ -147,7 +220,9 @@ impl Stretching {
             stiffness,
             formulation: StretchFormulation::default(),
             multipliers: None,
+            guard: false,
             rest: None,
+            unscaled: None,
             table: table::TensionTable::default(),
             gram: gram::TensionGram::default(),
         })
@@ -161,7 +236,9 @@ impl Stretching {
             stiffness: 1.0,
             formulation: StretchFormulation::Mixed,
             multipliers: None,
+            guard: false,
             rest: None,
+            unscaled: None,
             table: table::TensionTable::default(),
             gram: gram::TensionGram::default(),
         };
@@ -310,6 +387,38 @@ fn rest_scale(g0: Real) -> Real {
 }
 
 impl Stretching {
+    /// The energy of the form (without the compression guard, [`guard`]).
+    fn form_energy(&self, rod: &Rod) -> Real {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_energy(rod);
+        }
+        let k = self.stiffness / 8.0;
+        rod.quadrature()
+            .walk()
+            .enumerate()
+            .map(|(p, qp)| {
+                let (g0, scale) = self.metric(p);
+                let e = tangent(&qp, &rod.positions).norm_squared() - g0;
+                qp.weight * k * e * e * scale
+            })
+            .sum()
+    }
+
+    /// Adds the gradient of the form (without the compression guard).
+    fn add_form_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        if self.formulation != StretchFormulation::Pointwise {
+            return self.mixed_gradient(rod, gradient);
+        }
+        let half = 0.5 * self.stiffness;
+        for (p, qp) in rod.quadrature().walk().enumerate() {
+            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
+            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
+            for (a, &da) in qp.d1.iter().enumerate() {
+                gradient[qp.first + a] += f * da;
+            }
+        }
+    }
+
     /// The pointwise gradient (with `sums.gradient`) and Hessian, point by point in
     /// batches ([`point_batch`]).
     fn add_point_terms(&self, rod: &Rod, kind: HessianKind, mut sums: Sums<'_>) {
@@ -346,41 +455,36 @@ impl Energy for Stretching {
     }
 
     fn energy(&self, rod: &Rod) -> Real {
-        if self.formulation != StretchFormulation::Pointwise {
-            return self.mixed_energy(rod);
-        }
-        let k = self.stiffness / 8.0;
-        rod.quadrature()
-            .walk()
-            .enumerate()
-            .map(|(p, qp)| {
-                let (g0, scale) = self.metric(p);
-                let e = tangent(&qp, &rod.positions).norm_squared() - g0;
-                qp.weight * k * e * e * scale
-            })
-            .sum()
+        self.form_energy(rod) + self.guard_energy(rod)
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        if self.formulation != StretchFormulation::Pointwise {
-            return self.mixed_gradient(rod, gradient);
-        }
-        let half = 0.5 * self.stiffness;
-        for (p, qp) in rod.quadrature().walk().enumerate() {
-            let (c1, (g0, scale)) = (tangent(&qp, &rod.positions), self.metric(p));
-            let f = c1 * (qp.weight * half * (c1.norm_squared() - g0) * scale);
-            for (a, &da) in qp.d1.iter().enumerate() {
-                gradient[qp.first + a] += f * da;
-            }
-        }
+        self.add_form_gradient(rod, gradient);
+        let gradient = Some(gradient);
+        self.add_guard_terms(
+            rod,
+            GuardSums {
+                hessian: None,
+                gradient,
+            },
+        );
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
         if self.formulation != StretchFormulation::Pointwise {
-            return self.mixed_hessian(rod, kind, None, hessian);
+            self.mixed_hessian(rod, kind, None, hessian);
+        } else {
+            let gradient = None;
+            self.add_point_terms(rod, kind, Sums { hessian, gradient });
         }
-        let gradient = None;
-        self.add_point_terms(rod, kind, Sums { hessian, gradient });
+        let hessian = Some((kind, hessian));
+        self.add_guard_terms(
+            rod,
+            GuardSums {
+                hessian,
+                gradient: None,
+            },
+        );
     }
 
     fn add_gradient_and_hessian(
@@ -391,10 +495,13 @@ impl Energy for Stretching {
         hessian: &mut BlockBanded,
     ) {
         if self.formulation != StretchFormulation::Pointwise {
-            return self.mixed_hessian(rod, kind, Some(gradient), hessian);
+            self.mixed_hessian(rod, kind, Some(gradient), hessian);
+        } else {
+            let gradient = Some(&mut *gradient);
+            self.add_point_terms(rod, kind, Sums { hessian, gradient });
         }
-        let gradient = Some(gradient);
-        self.add_point_terms(rod, kind, Sums { hessian, gradient });
+        let (hessian, gradient) = (Some((kind, hessian)), Some(gradient));
+        self.add_guard_terms(rod, GuardSums { hessian, gradient });
     }
 
     fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
@@ -424,6 +531,20 @@ impl Energy for Stretching {
                 let eps = 0.5 * (c1.norm_squared() - g0) / g0;
                 *t += self.stiffness * eps * c1.norm() / g0.sqrt();
             }
+        }
+        true
+    }
+
+    /// The axial stiffness `EA` (an inextensible rod's penalty has its own continuation:
+    /// not scaled).
+    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
+        if self.multipliers.is_some() {
+            return false;
+        }
+        let own = *self.unscaled.get_or_insert(self.stiffness);
+        self.stiffness = if scale == 1.0 { own } else { own * scale };
+        if scale == 1.0 {
+            self.unscaled = None;
         }
         true
     }
