@@ -18,6 +18,7 @@ fn quick_bench_reports_every_key() {
         serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("parse");
     for key in [
         "step_us_16",
+        "step_us_16_consistent",
         "static_newton_us_16",
         "per_cp_flatness",
         "ensemble_rod_steps_per_s_1",

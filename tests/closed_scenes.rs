@@ -249,13 +249,19 @@ fn a_rubber_band_on_two_pegs_pulls_each_with_twice_its_tension() {
     }
 }
 
+/// The loop pulled flat between a pin and a grab keeps its two strands apart and
+/// uncrossed. (With 32 control points its ends cannot turn tighter than a few
+/// centimetres: the strands stay about 16 mm apart mid-way, as with the pointwise
+/// stretching. The lumped mixed form once turned tighter by bunching its material at
+/// the turns, which its projection did not see, and its strands touched there; the
+/// compression guard stopped that.)
 #[test]
 fn a_loop_pulled_flat_keeps_its_strands_apart() {
     let scene = Scene::load("scenes/loop_pulled.toml").expect("scene");
     let result = run(&scene).expect("run");
     let r = scene.rod.radius.expect("radius");
     let contact = result.contact.as_ref().expect("contact statistics");
-    let clearance = contact.min_clearance_ratio.expect("self-contact happened");
+    let clearance = contact.min_clearance_ratio.unwrap_or(Real::INFINITY);
     let p = |k: usize| Vector3::from(result.probes[k].positions.last().copied().expect("probe"));
     let (a, b) = (p(0), p(1));
     println!(
@@ -263,7 +269,7 @@ fn a_loop_pulled_flat_keeps_its_strands_apart() {
         (a - b).norm(),
         (a.x + b.x).abs() + (a.y - b.y).abs()
     );
-    assert!(clearance >= 0.85, "{clearance}");
+    assert!(clearance >= 0.95, "{clearance}");
     assert!(
         (a - b).norm() >= 2.0 * r,
         "the strands are side by side, not crossed"

@@ -229,3 +229,28 @@ fn a_tolerance_refines_the_knot_then_coarsens_it_once_tight() {
         assert!(w.clearance >= 0.95, "clearance {}", w.clearance);
     }
 }
+
+/// The knot scenes with the default stretching (`"auto"`, issue #44; the adaptive ones
+/// bundle the pointwise form for exact knot insertion): no strand within 0.95 · 2r of
+/// another and the trefoil's determinant throughout, fixed and adaptive, also with a
+/// thicker rod.
+#[test]
+fn knots_keep_their_clearance_with_the_default_stretching() {
+    use splinerod::scene::StretchFormulationSpec;
+    for (name, radius) in [
+        ("knot_tying", None),
+        ("knot_tying_adaptive", None),
+        ("knot_tying_adaptive", Some(0.004)),
+        ("knot_pulled", None),
+    ] {
+        let mut scene = scene(name, 1.2);
+        scene.rod.stretch_formulation = StretchFormulationSpec::Auto;
+        if let Some(r) = radius {
+            scene.rod.radius = Some(r);
+        }
+        let w = watch(&scene);
+        println!("{name}, radius {radius:?}: clearance {:.4}", w.clearance);
+        assert!(w.clearance >= 0.95, "{name}: clearance {}", w.clearance);
+        assert_eq!(determinant(&w.sim), 3, "{name}");
+    }
+}

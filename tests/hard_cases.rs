@@ -192,10 +192,10 @@ fn settled_runs_reach_the_static_equilibrium() {
 }
 
 /// Static solves from the straight 0.8 m start (compressed 20 %) land on the equilibrium
-/// found from next to the catenary (the soft cable's equilibrium) within 1e-9 m while
-/// the discrete energy has one minimum there (EA ≤ 1e4 N). Stiffer, membrane locking
-/// gives the 16-point cubic cable several stable equilibria (issue: locking-free
-/// stretching); there the solve must still converge, to a stable one.
+/// found from next to the catenary (the soft cable's equilibrium) within 1e-9 m, soft
+/// or stiff (the locking-free stretching has one minimum there; the stiff ones are
+/// reached by the solver's stiffness continuation). At EA = 1e9 N round-off ends Newton
+/// in its widened band (`newton::ROUND_OFF_BAND` tolerances, 1e-9 m): 1e-8 m there.
 #[test]
 fn static_solves_from_bad_starts_find_the_same_equilibrium() {
     let solve = |system: &mut RodSystem| {
@@ -205,7 +205,7 @@ fn static_solves_from_bad_starts_find_the_same_equilibrium() {
     };
     let mut near = pinned_cable(16, 0.8, 100.0).unwrap();
     solve(&mut near);
-    for ea in [1e3, 1e4, 1e7] {
+    for ea in [1e3, 1e4, 1e7, 4e7, 1e9] {
         let mut from_catenary = pinned_cable(16, 0.8, ea).unwrap();
         from_catenary.rod.positions.clone_from(&near.rod.positions);
         assert_eq!(
@@ -222,9 +222,8 @@ fn static_solves_from_bad_starts_find_the_same_equilibrium() {
             .zip(&from_catenary.rod.positions);
         let gap = gap.map(|(a, b)| (a - b).norm()).fold(0.0, Real::max);
         println!("EA {ea:e} from straight: {steps} continuation steps, {gap:.2e} m apart");
-        if ea <= 1e4 {
-            assert!(gap < 1e-9, "EA {ea:e}: {gap:e} m");
-        }
+        let allowed = if ea > 4e7 { 1e-8 } else { 1e-9 };
+        assert!(gap < allowed, "EA {ea:e}: {gap:e} m");
     }
     // A fold (EA = 100 N), against the solve from the straight start.
     let fold = hard_cases()
@@ -314,4 +313,128 @@ fn a_time_tolerance_shortens_the_steps_and_the_error() {
         "{e_controlled:e} vs {e_plain:e}"
     );
     assert!(converged(&controlled));
+}
+
+/// Runs the compressed rod of issue #44 for every combination, with `form` (`None`: the
+/// default), and returns the failures (name and what went wrong).
+fn compressed_failures(
+    duration: Real,
+    eis: &[Real],
+    compressions: &[Real],
+    dts: &[Real],
+    forms: &[Option<&'static str>],
+) -> Vec<String> {
+    use splinerod::hard_cases::compressed_rod;
+    let mut failures = Vec::new();
+    for &form in forms {
+        for &ei in eis {
+            for &c in compressions {
+                for method in ["implicit-euler", "implicit-midpoint", "bdf2"] {
+                    for &dt in dts {
+                        let cable = Cable {
+                            stretch_formulation: form,
+                            duration,
+                            ..compressed_rod(ei, c, method, dt)
+                        };
+                        let name = format!("{form:?} EI {ei} compressed {c} {method} dt {dt}");
+                        match splinerod::run(&cable.scene().unwrap()) {
+                            Ok(r) if converged(&r) && r.solver.unconverged_steps == 0 => {}
+                            Ok(r) => failures.push(format!("{name}: {:?}", r.solver)),
+                            Err(e) => failures.push(format!("{name}: {e}")),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    failures
+}
+
+/// A rod with bending released straight between pins closer than its length (issue
+/// #44: EA = 100 N, no gravity): every step converges, under every stretching form and
+/// every scheme, from 20 % to 90 % compression and 1 ms to 50 ms steps. (The
+/// Green–Lagrange material is unstable below a stretch of 1/√3, so the strongly
+/// compressed rods collapse along their axis before they buckle; what is asked here is
+/// that every step of that converges.) A representative subset over 0.25 s; the full
+/// matrix over 0.5 s is `compressed_rods_with_bending_converge_everywhere` (ignored:
+/// about 20 minutes).
+#[test]
+fn compressed_rods_with_bending_converge() {
+    let failures = compressed_failures(
+        0.25,
+        &[0.1, 10.0, 50.0],
+        &[0.2, 0.5, 0.9],
+        &[0.001, 0.05],
+        &[None],
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+    let failures = compressed_failures(
+        0.25,
+        &[10.0],
+        &[0.3, 0.8],
+        &[0.01],
+        &[Some("mixed"), Some("mixed-consistent"), Some("pointwise")],
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The whole matrix of [`compressed_rods_with_bending_converge`].
+#[test]
+#[ignore = "about 20 minutes; run with --ignored"]
+fn compressed_rods_with_bending_converge_everywhere() {
+    let failures = compressed_failures(
+        0.5,
+        &[0.1, 0.3, 1.0, 3.0, 10.0, 50.0],
+        &[0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9],
+        &[0.001, 0.005, 0.02, 0.05],
+        &[
+            None,
+            Some("mixed"),
+            Some("mixed-consistent"),
+            Some("pointwise"),
+        ],
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Static solves of a cable from the straight start squeezed to 20–50 % of its length
+/// (issue #44): they converge for EA up to 1e9 N and 16–64 points, to a stable
+/// equilibrium (the solver checks its curvature) as close to the exact elastic catenary
+/// as the solve started on it gets (`examples/form_study.rs`: 4.9e-4, 1.0e-2, 1.9e-7 and
+/// 1.2e-3 m for these deep shapes and resolutions; tolerances 10 % above).
+#[test]
+fn static_solves_from_heavily_compressed_starts_converge() {
+    use splinerod::problems::elastic_catenary::ElasticCatenary;
+    for (ea, span, n, tol) in [
+        (4e7, 0.25, 32, 5.4e-4),
+        (1e9, 0.2, 16, 1.1e-2),
+        (1e7, 0.5, 64, 2.1e-7),
+        (1e5, 0.2, 32, 1.3e-3),
+    ] {
+        let cable = Cable {
+            ea,
+            span,
+            control_points: n,
+            method: "static",
+            ..Cable::default()
+        };
+        let result = splinerod::run(&cable.scene().unwrap())
+            .unwrap_or_else(|e| panic!("EA {ea:e}, span {span}, {n} points: {e}"));
+        let exact = ElasticCatenary::new(1.0, span, 0.1 * 9.81, ea).unwrap();
+        let samples = result.samples.s.iter().zip(&result.samples.positions);
+        let error = samples
+            .map(|(&s, p)| {
+                let e = exact.point(s);
+                (Vector3::new(e[0], e[1], 0.0) - Vector3::from(*p)).norm()
+            })
+            .fold(0.0, Real::max);
+        println!(
+            "EA {ea:e}, span {span}, {n} points: {} Newton iterations, {} continuation steps, {error:.2e} m from the exact catenary",
+            result.solver.newton_iterations, result.solver.continuation_steps
+        );
+        assert!(
+            error < tol,
+            "EA {ea:e}, span {span}, {n} points: {error:e} m"
+        );
+    }
 }

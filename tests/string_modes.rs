@@ -33,6 +33,20 @@ fn modal_frequencies_match_the_analytic_string() {
         );
         assert!(et <= 1e-5 && el <= tol_l, "{formulation:?}");
     }
+    // The default form (`"auto"`) of the bundled string: the consistent one (the pins
+    // stretch it by 20 %), both modes within 1e-5.
+    let scene = Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/string_modes.toml"
+    ))
+    .expect("scene");
+    let default = scene
+        .stretch_formulation_used(&scene.build_rod().expect("rod"))
+        .expect("form");
+    let (t, l) = string_modes_with(16, default).expect("modes");
+    let (et, el) = ((t.frequency - ft).abs() / ft, (l.frequency - fl).abs() / fl);
+    println!("default ({default:?}), 16 cps: rel err transverse {et:.2e}, longitudinal {el:.2e}");
+    assert!(et <= 1e-5 && el <= 1e-5, "default {default:?}");
 }
 
 #[test]

@@ -24,6 +24,7 @@ use crate::problems::pinned_cable;
 use crate::{Ensemble, Error, RodSystem, Simulation};
 use serde::Serialize;
 use splinerod_core::Real;
+use splinerod_energies::StretchFormulation;
 use splinerod_integrators::{ImplicitEuler, Integrator, NewtonParams, StaticParams, StaticSolver};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -31,8 +32,11 @@ use std::time::Instant;
 /// Everything `bench` measures (JSON keys as in the issue).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct BenchResult {
-    /// Median implicit Euler step, 16 control points, µs.
+    /// Median implicit Euler step, 16 control points, µs (the lumped mixed form).
     pub step_us_16: Real,
+    /// The same step with the consistent mixed form (what `"auto"` takes for this soft
+    /// cable in a scene), µs.
+    pub step_us_16_consistent: Real,
     /// Median implicit Euler step of a 16-point rod clamped at both ends with stretching
     /// and bending, µs ([`crate::bench::twist`]).
     pub step_us_16_bending: Real,
@@ -113,8 +117,13 @@ pub(crate) fn median(mut v: Vec<Real>) -> Real {
 
 /// Median wall time (s) of one step of an `n`-point stretched cable.
 fn step_seconds(n: usize, reps: usize) -> Result<Real, Error> {
-    let sim = Simulation::new(pinned_cable(n, 1.05, 100.0)?, one_iteration()?);
-    median_step_seconds(sim, reps)
+    step_seconds_with(n, reps, StretchFormulation::Mixed)
+}
+
+/// [`step_seconds`] with the stretching `form`.
+fn step_seconds_with(n: usize, reps: usize, form: StretchFormulation) -> Result<Real, Error> {
+    let cable = crate::problems::pinned_cable_with(n, 1.05, 100.0, form)?;
+    median_step_seconds(Simulation::new(cable, one_iteration()?), reps)
 }
 
 /// Median wall time (s) of one 1 ms step of `sim` over `reps` steps, after five.
@@ -236,6 +245,8 @@ fn stiff_catenary() -> Result<(Real, usize, Real, usize), Error> {
 pub fn measure(quick: bool) -> Result<BenchResult, Error> {
     let scale = |full: usize, short: usize| if quick { short } else { full };
     let step_us_16 = step_seconds(16, scale(20_000, 2_000))? * 1e6;
+    let consistent = StretchFormulation::MixedConsistent;
+    let step_us_16_consistent = step_seconds_with(16, scale(20_000, 2_000), consistent)? * 1e6;
     let static_newton_us_16 = static_newton_seconds(scale(200, 20))? * 1e6;
     let step_us_16_bending = crate::bench::twist::step_seconds(false, scale(20_000, 2_000))? * 1e6;
     let step_us_16_twist = crate::bench::twist::step_seconds(true, scale(20_000, 2_000))? * 1e6;
@@ -268,6 +279,7 @@ pub fn measure(quick: bool) -> Result<BenchResult, Error> {
         checkpoint_us_16: checkpoint_s * 1e6,
         checkpoint_bytes_16: checkpoint_bytes as Real,
         step_us_16,
+        step_us_16_consistent,
         step_us_16_bending,
         step_us_16_twist,
         world_overhead_8: crate::bench::world::world_overhead(8, scale(4_000, 400))?,

@@ -50,6 +50,10 @@ pub struct Cable {
     pub clamp: bool,
     /// Rod radius, m (needed by contact).
     pub radius: Option<f64>,
+    /// Gravity along −y, m/s².
+    pub gravity: f64,
+    /// `rod.stretch_formulation` (`None`: the default, `"auto"`).
+    pub stretch_formulation: Option<&'static str>,
     /// Extra TOML appended to the scene (grabs, contact, ...).
     pub extra: String,
 }
@@ -71,6 +75,8 @@ impl Default for Cable {
             pin_both: true,
             clamp: false,
             radius: None,
+            gravity: 9.81,
+            stretch_formulation: None,
             extra: String::new(),
         }
     }
@@ -91,6 +97,9 @@ impl Cable {
             .radius
             .map_or(String::new(), |r| format!("radius = {r:e}\n"));
         let clamp = if self.clamp { "clamp = true\n" } else { "" };
+        let form = self.stretch_formulation.map_or(String::new(), |f| {
+            format!("stretch_formulation = \"{f}\"\n")
+        });
         let far_pin = if self.pin_both {
             "[[pins]]\nat = 1.0\n"
         } else {
@@ -103,9 +112,9 @@ impl Cable {
         };
         format!(
             "[rod]\nrest_length = {l:e}\nlinear_density = {mu:e}\nstretch_stiffness = {ea:e}\n\
-             {bending}{radius}damping = {damping:e}\ncontrol_points = {n}\ndegree = {degree}\n\
+             {form}{bending}{radius}damping = {damping:e}\ncontrol_points = {n}\ndegree = {degree}\n\
              start = [0.0, 0.0, 0.0]\nend = [{span:e}, 0.0, 0.0]\n\n[[pins]]\nat = 0.0\n{clamp}{far_pin}\n\
-             [world]\ngravity = [0.0, -9.81, 0.0]\n\n[solver]\nmethod = \"{method}\"\n{timing}\n\
+             [world]\ngravity = [0.0, {g:e}, 0.0]\n\n[solver]\nmethod = \"{method}\"\n{timing}\n\
              [output]\nsamples = 41\n{extra}",
             l = self.length,
             mu = self.density,
@@ -115,6 +124,7 @@ impl Cable {
             degree = self.degree,
             span = self.span,
             method = self.method,
+            g = -self.gravity,
             extra = self.extra,
         )
     }
@@ -125,6 +135,20 @@ impl Cable {
             name: name.into(),
             scene: self.scene()?,
         })
+    }
+}
+
+/// The issue #44 rod: 1 m, μ = 0.1 kg/m, EA = 100 N, bending `ei`, 16 points, no
+/// gravity, released straight between pins `1 − compression` metres apart (compressed
+/// by that fraction), stepped by `method` at `dt` for 0.5 s.
+pub fn compressed_rod(ei: f64, compression: f64, method: &'static str, dt: f64) -> Cable {
+    Cable {
+        span: 1.0 - compression,
+        ei: Some(ei),
+        gravity: 0.0,
+        method,
+        dt,
+        ..Cable::default()
     }
 }
 
@@ -264,6 +288,18 @@ pub fn hard_cases() -> Result<Vec<HardCase>, Error> {
             ..base.clone()
         }
         .case("stretched to 3x")?,
+        compressed_rod(10.0, 0.2, "implicit-euler", 0.01).case("bending, compressed 20 %")?,
+        compressed_rod(0.1, 0.9, "bdf2", 0.05).case("bending, compressed 90 %, BDF2 dt 50 ms")?,
+        compressed_rod(50.0, 0.5, "implicit-midpoint", 0.001)
+            .case("stiff bending, compressed 50 %, midpoint")?,
+        Cable {
+            span: 0.25,
+            ea: 4e7,
+            control_points: 32,
+            method: "static",
+            ..base.clone()
+        }
+        .case("static EA 4e7 from 75 % compressed")?,
         Cable {
             control_points: 10_000,
             duration: 0.02,

@@ -77,6 +77,8 @@ pub struct Report {
     pub order_mixed: Real,
     /// The locking study: each formulation's name and rows.
     pub locking: Vec<(&'static str, Vec<LockingRow>)>,
+    /// The default-form study (issue #44): every form and the default on four shapes.
+    pub forms: Vec<locking::FormRow>,
     /// Damped implicit Euler catenary, one sample per (dt, resolution).
     pub dynamics: Vec<Sample>,
     /// Modal frequency errors: (control points, transverse, longitudinal).
@@ -126,6 +128,7 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
     ] {
         report.locking.push((name, locking::study(formulation)));
     }
+    report.forms = locking::form_study()?;
     // From 8 control points: with 6, the compressed straight start can settle in an
     // upward arch (compression-resistant material, too coarse to buckle), not the catenary.
     let dynamic_n: Vec<usize> = static_n

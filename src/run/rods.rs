@@ -24,14 +24,18 @@ pub struct RodOutput {
     pub energy: BTreeMap<String, Real>,
     /// The forces of the `[[pins]]` entries naming it, in file order, N.
     pub pin_forces: Vec<[Real; 3]>,
+    /// The stretching form it used (see [`crate::run::runner::RodModel`]).
+    pub stretch_formulation_used: String,
 }
 
 /// Every rod's results; empty for a one-rod scene.
-/// `pin_forces`: one per `[[pins]]` entry, in file order.
+/// `pin_forces`: one per `[[pins]]` entry, in file order; `forms`: each rod's stretching
+/// form.
 pub fn rods(
     scene: &Scene,
     system: &RodSystem,
     pin_forces: &[[Real; 3]],
+    forms: &[splinerod_energies::StretchFormulation],
 ) -> Result<Vec<RodOutput>, Error> {
     let rod = &system.rod;
     let m = scene.output.samples;
@@ -56,6 +60,7 @@ pub fn rods(
             control_points: part.len(),
             knots: part.basis().knots().iter().map(|t| t / l).collect(),
             pin_forces: forces.map(|(_, f)| *f).collect(),
+            stretch_formulation_used: forms.get(k).map_or("", |f| f.name()).to_string(),
             samples: Samples {
                 s: s.clone(),
                 positions,

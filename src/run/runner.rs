@@ -152,6 +152,14 @@ impl AddAssign for SolverTotals {
 
 pub use crate::run::twist::TwistOutput;
 
+/// How a rod was modelled (JSON `rod`).
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct RodModel {
+    /// The stretching form the run used (`"mixed"`, `"mixed-consistent"` or
+    /// `"pointwise"`): the scene's, or what `"auto"` chose (`scene/auto_form.rs`).
+    pub stretch_formulation_used: String,
+}
+
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunResult {
@@ -185,6 +193,9 @@ pub struct RunResult {
     pub twist: Option<TwistOutput>,
     /// Mechanically independent pieces at the end (rods + cuts).
     pub pieces: usize,
+    /// How the rod was modelled (for a `[[rods]]` scene, its first rod; `rods[k]` has
+    /// each rod's).
+    pub rod: RodModel,
     /// Each rod of a `[[rods]]` scene: name, control points, samples, energies. Empty
     /// for a one-rod scene (whose rod is the top-level result).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -377,6 +388,7 @@ pub(crate) fn finish(
     let l = rod.material().rest_length;
     let statics = sim.integrator.solves_equilibrium();
     let pin_forces = scene_pin_forces(scene, sim);
+    let forms = scene.stretch_formulations_used()?;
     Ok(RunResult {
         time: sim.time,
         steps: sim.steps,
@@ -395,7 +407,10 @@ pub(crate) fn finish(
         pin_torques: pin_torques(scene, sim)?,
         twist: crate::run::twist::twist(system)?,
         pieces: rod.pieces(),
-        rods: crate::run::rods::rods(scene, system, &pin_forces)?,
+        rod: RodModel {
+            stretch_formulation_used: forms.first().map_or("", |f| f.name()).to_string(),
+        },
+        rods: crate::run::rods::rods(scene, system, &pin_forces, &forms)?,
         obstacle_forces: system
             .obstacle_forces()?
             .into_iter()

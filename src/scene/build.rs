@@ -149,7 +149,8 @@ impl Scene {
                 })?
             }
         };
-        stretching.formulation = self.rod.stretch_formulation.into();
+        stretching.formulation = self.stretch_formulation_used(&rod)?;
+        stretching.guard = self.contact.as_ref().is_some_and(|c| c.enabled);
         if ea == Real::INFINITY {
             stretching.make_inextensible(&rod);
         }
@@ -269,7 +270,7 @@ impl Scene {
             tolerance: self.solver.tolerance.unwrap_or(d.tolerance),
             line_search: self.solver.line_search,
             linear_solver: self.linear_solver(),
-            max_step: self.solver.max_step,
+            max_step: self.max_step(),
             accept_unconverged: self.solver.accept_unconverged,
         }
     }

@@ -6,6 +6,7 @@
 //! range-checked by [`Scene::validate`], which names the field in its error.
 
 pub(crate) mod adapt;
+mod auto_form;
 mod build;
 pub(crate) mod closed;
 pub(crate) mod contact;

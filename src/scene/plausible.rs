@@ -53,7 +53,8 @@ impl Scene {
             _ => return Ok(()),
         };
         let stretch = length / r.rest_length;
-        if stretch < MIN_START_STRETCH {
+        // A relative 1e-12 of slack: `end = 0.1 · L` written as 1 − 0.9 is still allowed.
+        if stretch < MIN_START_STRETCH * (1.0 - 1e-12) {
             let reason = format!(
                 "the initial curve is at most {length:.4e} m long for a rest length of {} m (stretch {stretch:.3e}, at least {MIN_START_STRETCH} allowed)",
                 r.rest_length

@@ -21,7 +21,7 @@ use splinerod_energies::OnSegment;
 
 /// Where the entries of one rod's scene come from in the file.
 #[derive(Debug, Default)]
-struct Origins {
+pub(crate) struct Origins {
     pins: Vec<usize>,
     grabs: Vec<usize>,
     loads: Vec<usize>,
@@ -116,7 +116,7 @@ impl Scene {
 
     /// Rod `k` as a one-rod scene: its table, and the pins, grabs, loads and cuts naming
     /// it; and where they come from in the file.
-    fn rod_scene(&self, k: usize) -> Result<(Scene, Origins), Error> {
+    pub(crate) fn rod_scene(&self, k: usize) -> Result<(Scene, Origins), Error> {
         let mut origins = Origins::default();
         let mut sub = self.clone();
         sub.rod = self.rods[k].clone();

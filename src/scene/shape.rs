@@ -21,8 +21,13 @@ pub enum RestShape {
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum StretchFormulationSpec {
-    /// The strain projected onto the degree-`d − 1` splines (locking-free; default).
+    /// Chosen from the strain the scene puts on the rod (the default; see
+    /// `scene/auto_form.rs`): the consistent mixed form on stretchy rods, the lumped
+    /// one on stiff ones.
     #[default]
+    Auto,
+    /// The strain projected onto the degree-`d − 1` splines with the lumped Gram matrix
+    /// (locking-free; second order where the strain varies).
     Mixed,
     /// The strain at every quadrature point (order `d + 1` on stretchy rods; locks on
     /// stiff ones).
@@ -33,19 +38,10 @@ pub enum StretchFormulationSpec {
 }
 
 impl StretchFormulationSpec {
-    /// Whether the strain is projected onto the tension space (both mixed forms).
+    /// Whether the strain is projected onto the tension space (every form but the
+    /// pointwise one; `"auto"` only chooses mixed forms).
     pub fn is_mixed(self) -> bool {
         self != Self::Pointwise
-    }
-}
-
-impl From<StretchFormulationSpec> for splinerod_energies::StretchFormulation {
-    fn from(spec: StretchFormulationSpec) -> Self {
-        match spec {
-            StretchFormulationSpec::Mixed => Self::Mixed,
-            StretchFormulationSpec::Pointwise => Self::Pointwise,
-            StretchFormulationSpec::MixedConsistent => Self::MixedConsistent,
-        }
     }
 }
 
