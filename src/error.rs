@@ -117,6 +117,16 @@ pub enum Error {
     /// From an integrator or solver.
     #[error(transparent)]
     Integrator(#[from] IntegratorError),
+    /// A step failed on a non-finite value that an energy returned; names the energy.
+    #[error("energy `{energy}` returned a non-finite {what}: {source}")]
+    EnergyNotFinite {
+        /// The energy's name.
+        energy: String,
+        /// `"energy"` or `"gradient"`.
+        what: &'static str,
+        /// The solver's failure.
+        source: IntegratorError,
+    },
     /// From the adaptivity crate.
     #[error(transparent)]
     Adapt(#[from] AdaptError),
@@ -154,9 +164,18 @@ impl Error {
     ) -> Self {
         Self::InvalidField {
             field: field.into(),
-            value: value.to_string(),
+            value: readable(value.to_string()),
             reason: reason.into(),
         }
+    }
+}
+
+/// A number written out in more than 24 characters (`1e300` prints 301 digits) in
+/// exponent form; anything else as it is.
+fn readable(value: String) -> String {
+    match value.parse::<f64>() {
+        Ok(v) if value.len() > 24 => format!("{v:e}"),
+        _ => value,
     }
 }
 

@@ -238,8 +238,13 @@ impl Adapter {
     }
 
     /// Whether inserting `at` leaves both halves of its span at least `min_span` long
-    /// (repeating an existing knot makes no new span and is always allowed).
+    /// (repeating an existing knot makes no new span and is allowed below multiplicity
+    /// `d`: a criterion never makes the curve discontinuous, which at `d + 1` — the
+    /// junction of two rods of `[[rods]]`, a cut — it already is).
     fn room_for(&self, rod: &Rod, at: Real) -> bool {
+        if rod.knot_multiplicity(at) >= rod.basis().degree() {
+            return false;
+        }
         let knots = rod.basis().knots();
         let i = knots.partition_point(|&t| t <= at);
         let (Some(&right), Some(&left)) = (knots.get(i), i.checked_sub(1).map(|j| &knots[j]))

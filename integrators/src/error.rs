@@ -26,13 +26,13 @@ pub enum IntegratorError {
     #[error("pins are redundant or conflicting: their constraint rows are linearly dependent")]
     RedundantPins,
     /// A value became NaN or infinite; the step was rolled back.
-    #[error("the step produced non-finite {what}; state rolled back (try a smaller dt)")]
+    #[error("the step produced non-finite {what}; state rolled back")]
     NonFinite {
         /// Which quantity.
         what: &'static str,
     },
     /// A Newton step was absurdly large: the iteration is diverging.
-    #[error("a Newton step moved a point by {step:e} m (limit {limit:e} m): the solve is diverging; state rolled back (try a smaller dt)")]
+    #[error("a Newton step moved a point by {step:e} m (limit {limit:e} m): the solve is diverging; state rolled back")]
     Diverged {
         /// Largest point displacement of the step, m.
         step: Real,
@@ -40,7 +40,7 @@ pub enum IntegratorError {
         limit: Real,
     },
     /// Newton did not reach the tolerance.
-    #[error("Newton did not converge in {iterations} iterations (residual {residual:e}); state rolled back (try a smaller dt or more newton_iterations)")]
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:e}); state rolled back")]
     NotConverged {
         /// Iterations done.
         iterations: usize,

@@ -3,7 +3,6 @@
 
 use super::diagram::{is_trefoil_diagram, polyline_crossings};
 use super::relax::{relaxed_fit, sample_curve, Target};
-use crate::error::positive;
 use crate::Error;
 use nalgebra::Vector3;
 use splinerod_core::{BSplineSpace, Material, Real, Rod, MAX_DEGREE};
@@ -56,8 +55,8 @@ impl OverhandSpec {
 
     /// Error naming the first field out of range.
     pub fn validate(&self) -> Result<(), Error> {
-        positive("size", self.size)?;
-        positive("span", self.span)?;
+        crate::scene::plausible::length("size", self.size)?;
+        crate::scene::plausible::length("span", self.span)?;
         if !(1..=MAX_DEGREE).contains(&self.degree) {
             let reason = format!("must be 1 to {MAX_DEGREE}");
             return Err(Error::field("degree", self.degree, reason));

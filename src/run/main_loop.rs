@@ -116,7 +116,7 @@ pub(crate) fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Ru
     let mut members = Vec::new();
     let mut sims = Vec::new();
     for (member_scene, mut sim) in build_members(scene, only)? {
-        let mut cuts = CutSchedule::new(&member_scene);
+        let mut cuts = CutSchedule::new(&member_scene)?;
         prepare(&member_scene, &mut sim, &mut cuts)?;
         let mut tally = Tally::new(&member_scene, &sim.system)?;
         tally.cuts = cuts;

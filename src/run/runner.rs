@@ -451,10 +451,10 @@ fn clamp_tangents<'a>(
     let pins = &sim.system.pins;
     (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
         let pin = &pins[i];
-        let clamp = scene
-            .pins
-            .iter()
-            .position(|p| p.clamp && scene.entry_coordinate(p.rod.as_deref(), p.at) == pin.at);
+        let clamp = scene.pins.iter().position(|p| {
+            p.clamp
+                && matches!(scene.entry_coordinate(p.rod.as_deref(), p.at), Ok(s) if s == pin.at)
+        });
         clamp.filter(|_| pin.tangent).map(|j| (i, j))
     })
 }

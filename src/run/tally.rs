@@ -37,7 +37,7 @@ impl Tally {
             knot: None,
             estimates: None,
             stages: StageTimes::default(),
-            cuts: CutSchedule::new(scene),
+            cuts: CutSchedule::new(scene)?,
         };
         tally.summary(&system.summary()?);
         if scene.rod.overhand.is_some() {
@@ -122,14 +122,14 @@ pub(crate) struct CutSchedule {
 
 impl CutSchedule {
     /// The cuts of `scene` (material coordinates in m), sorted by time.
-    pub(crate) fn new(scene: &Scene) -> Self {
-        let mut cuts: Vec<_> = scene
+    pub(crate) fn new(scene: &Scene) -> Result<Self, Error> {
+        let mut cuts = scene
             .cuts
             .iter()
-            .map(|c| (c.time, scene.entry_coordinate(c.rod.as_deref(), c.at)))
-            .collect();
+            .map(|c| Ok((c.time, scene.entry_coordinate(c.rod.as_deref(), c.at)?)))
+            .collect::<Result<Vec<_>, Error>>()?;
         cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Self { cuts, next: 0 }
+        Ok(Self { cuts, next: 0 })
     }
 
     /// Calls `cut` for every cut due by `time` (a step of `dt` just ended) not yet made.

@@ -305,6 +305,7 @@ impl Scene {
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = self.integrator()?;
         let system = self.build_system()?;
+        self.check_start_above_floor(&system.rod)?;
         self.check_start_clearance(&system)?;
         let mut sim = Simulation::new(system, integrator);
         if let Some(adapter) = self.adapter()? {

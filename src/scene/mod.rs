@@ -15,7 +15,7 @@ pub mod limits;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
 pub(crate) mod pins;
-mod plausible;
+pub(crate) mod plausible;
 pub(crate) mod rods;
 pub(crate) mod shape;
 pub(crate) mod solver;
@@ -305,7 +305,7 @@ impl Scene {
     /// Range checks of every value; the error names the field.
     pub fn validate(&self) -> Result<(), Error> {
         let r = &self.rod;
-        positive("rod.rest_length", r.rest_length)?;
+        plausible::length("rod.rest_length", r.rest_length)?;
         positive("rod.linear_density", r.linear_density)?;
         if r.stretch_stiffness != f64::INFINITY {
             positive("rod.stretch_stiffness", r.stretch_stiffness)?;
@@ -348,6 +348,7 @@ impl Scene {
         }
         self.validate_shape()?;
         self.validate_pins()?;
+        self.validate_plausible()?;
         finite_vec("world.gravity", self.world.gravity)?;
         self.validate_solver()?;
         if self.output.samples < 2 {

@@ -89,11 +89,11 @@ impl Scene {
         splinerod_core::segments::on_segment(start, start + length, fraction * length, follows)
     }
 
-    /// [`Scene::coordinate`] of an entry naming rod `name` (validated: an unknown name
-    /// is the first rod).
-    pub fn entry_coordinate(&self, name: Option<&str>, fraction: Real) -> Real {
-        let k = self.rod_index("rod", name).unwrap_or(0);
-        self.coordinate(k, fraction)
+    /// [`Scene::coordinate`] of an entry naming rod `name`; an unknown name (or none in a
+    /// scene of several rods) is an error naming `rod`.
+    pub fn entry_coordinate(&self, name: Option<&str>, fraction: Real) -> Result<Real, Error> {
+        let k = self.rod_index("rod", name)?;
+        Ok(self.coordinate(k, fraction))
     }
 
     /// Index of the rod named `name` (`None`: the only rod); errors name `field`.

@@ -78,9 +78,14 @@ pub fn assert_field_value(message: &str, field: &str, value: &str) {
     );
 }
 
-/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`.
+/// `value` as the error displays it: `-1.0` as `-1`, `nan` as `NaN`, a number of more
+/// than 24 characters in exponent form (`1e300`).
 pub fn shown(value: &str) -> String {
-    value.parse::<f64>().unwrap().to_string()
+    let v = value.parse::<f64>().unwrap();
+    match v.to_string() {
+        long if long.len() > 24 => format!("{v:e}"),
+        short => short,
+    }
 }
 
 /// Negative, zero and non-finite values of `key` in `text` are rejected naming `field`
