@@ -202,10 +202,11 @@ pub struct ContactSummary {
     /// Smallest centre-line distance among the contacts, m (`None` without contacts).
     pub min_distance: Option<Real>,
     /// The smallest clearance ratio (`None` without contacts): centre-line distance
-    /// over the diameter `2r` between strands, over the radius `r` from an obstacle;
+    /// over the diameter `2r` between strands, over the radius `r` from the floor or an
+    /// obstacle;
     /// below 1 the rod overlaps.
     pub min_clearance_ratio: Option<Real>,
-    /// Material samples within the penalty's reach of an obstacle.
+    /// Points of the rod within the penalty's reach of the floor or an obstacle.
     pub obstacle_contacts: usize,
 }
 

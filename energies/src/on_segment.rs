@@ -99,6 +99,18 @@ impl OnSegment {
         f(local)
     }
 
+    /// Where the segment cannot be evaluated (the rod has no such segment any more):
+    /// NaN in its part of `gradient` (all of it if the part is not there), so the
+    /// failure is seen — as the NaN energy is — instead of a gradient with nothing added.
+    fn poison(&self, joined: &Rod, gradient: &mut [Vector3<Real>]) {
+        let range = joined.segment_points(self.segment);
+        let part = match gradient.get_mut(range) {
+            Some(part) if !part.is_empty() => part,
+            _ => gradient,
+        };
+        part.fill(Vector3::repeat(Real::NAN));
+    }
+
     /// Start of the segment's parameter interval.
     fn start(&self, joined: &Rod) -> Real {
         joined.segments().get(self.segment).map_or(0.0, |g| g.start)
@@ -146,11 +158,15 @@ impl Energy for OnSegment {
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         let first = rod.segment_points(self.segment).start;
-        self.with(rod, (), |local| {
+        let done = self.with(rod, false, |local| {
             let n = local.rod.len();
             self.inner
                 .add_gradient(&local.rod, &mut gradient[first..first + n]);
+            true
         });
+        if !done {
+            self.poison(rod, gradient);
+        }
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
@@ -171,13 +187,17 @@ impl Energy for OnSegment {
         hessian: &mut BlockBanded,
     ) {
         let first = rod.segment_points(self.segment).start;
-        self.with(rod, (), |local| {
+        let done = self.with(rod, false, |local| {
             let (part, h) = (&local.rod, &mut local.hessian);
             h.reset(part.len(), self.inner.bandwidth(part));
             let g = &mut gradient[first..first + part.len()];
             self.inner.add_gradient_and_hessian(part, kind, g, h);
             hessian.add_shifted(h, first);
+            true
         });
+        if !done {
+            self.poison(rod, gradient);
+        }
     }
 
     /// Asked once per Newton iteration: answered on the segment's copy as it is (a

@@ -55,7 +55,7 @@ impl RunResult {
             ));
             if c.max_obstacle_contacts > 0 {
                 let n = c.max_obstacle_contacts;
-                out.push_str(&format!(", {n} samples on obstacles"));
+                out.push_str(&format!(", {n} points on the floor and obstacles"));
             }
             out.push('\n');
         }

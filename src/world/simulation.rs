@@ -20,7 +20,7 @@ use crate::world::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepSt
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
 use splinerod_core::{Real, Rod};
-use splinerod_integrators::{Integrator, StepStats};
+use splinerod_integrators::{Integrator, IntegratorError, StepStats};
 use std::time::Instant;
 
 /// Most times one step is recomputed on a finer basis because its error estimate was
@@ -109,7 +109,24 @@ impl Simulation {
             return Err(Error::field("dt", dt, "must be finite and positive"));
         }
         self.system.check_knots_heard()?;
-        self.advance(dt)
+        self.system.take_non_finite_energy();
+        let result = self.advance(dt);
+        result.map_err(|e| self.name_non_finite_energy(e))
+    }
+
+    /// `e`, naming the energy that returned a non-finite value if that is what failed.
+    fn name_non_finite_energy(&self, e: Error) -> Error {
+        match (e, self.system.take_non_finite_energy()) {
+            (
+                Error::Integrator(source @ IntegratorError::NonFinite { .. }),
+                Some((what, energy)),
+            ) => Error::EnergyNotFinite {
+                energy,
+                what,
+                source,
+            },
+            (e, _) => e,
+        }
     }
 
     /// Solves for the equilibrium at the current time (the integrator must be an

@@ -58,6 +58,9 @@ pub struct RodSystem {
     heard_epoch: u64,
     /// Every knot change so far, in order (checkpoints replay them).
     pub(crate) knot_changes: Vec<crate::world::saved::KnotChange>,
+    /// The first energy found returning a non-finite value or gradient since the last
+    /// [`RodSystem::take_non_finite_energy`] (`what`, name).
+    non_finite: std::sync::Mutex<Option<(&'static str, String)>>,
 }
 
 impl RodSystem {
@@ -73,6 +76,42 @@ impl RodSystem {
             time: 0.0,
             drivers: Vec::new(),
             loads: Vec::new(),
+            non_finite: std::sync::Mutex::new(None),
+        }
+    }
+
+    /// The energy that returned a non-finite energy or gradient since the last call
+    /// (what it returned, its name), cleared. A step that failed on a non-finite value
+    /// names its culprit with it.
+    pub fn take_non_finite_energy(&self) -> Option<(&'static str, String)> {
+        self.non_finite
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .take()
+    }
+
+    /// Records the first energy whose value (`what = "energy"`) or gradient is not
+    /// finite: called only once the sum is found non-finite, so it costs nothing on a
+    /// finite evaluation.
+    fn find_non_finite(&self, what: &'static str) {
+        let culprit = self.acting().find(|e| match what {
+            "energy" => !e.energy(&self.rod).is_finite(),
+            _ => {
+                let mut g = vec![Vector3::zeros(); self.rod.len()];
+                e.add_gradient(&self.rod, &mut g);
+                g.iter().any(|v| !v.iter().all(|c| c.is_finite()))
+            }
+        });
+        let mut slot = self.non_finite.lock().unwrap_or_else(|e| e.into_inner());
+        if let (None, Some(e)) = (slot.as_ref(), culprit) {
+            *slot = Some((what, e.name().to_string()));
+        }
+    }
+
+    /// [`Self::find_non_finite`] for the gradient if `gradient` has a non-finite entry.
+    fn check_gradient(&self, gradient: &[Vector3<Real>]) {
+        if gradient.iter().any(|v| !v.iter().all(|c| c.is_finite())) {
+            self.find_non_finite("gradient");
         }
     }
 
@@ -314,12 +353,17 @@ impl System for RodSystem {
         &self.pins
     }
     fn potential_energy(&self) -> Real {
-        self.acting().map(|e| e.energy(&self.rod)).sum()
+        let total: Real = self.acting().map(|e| e.energy(&self.rod)).sum();
+        if !total.is_finite() {
+            self.find_non_finite("energy");
+        }
+        total
     }
     fn add_potential_gradient(&self, gradient: &mut [Vector3<Real>]) {
         for e in self.acting() {
             e.add_gradient(&self.rod, gradient);
         }
+        self.check_gradient(gradient);
     }
     fn add_potential_hessian(&self, kind: HessianKind, hessian: &mut BlockBanded) {
         for e in self.acting() {
@@ -335,6 +379,7 @@ impl System for RodSystem {
         for e in self.acting() {
             e.add_gradient_and_hessian(&self.rod, kind, gradient, hessian);
         }
+        self.check_gradient(gradient);
     }
     fn has_hessian_remainder(&self) -> bool {
         self.acting().any(|e| e.has_hessian_remainder(&self.rod))

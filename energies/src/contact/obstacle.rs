@@ -258,11 +258,12 @@ impl Contact {
         Ok(forces)
     }
 
-    /// Number of samples touching an obstacle and the smallest distance of a centre
-    /// line from an obstacle over the rod's radius (`None` without such contacts).
+    /// Number of points of the rod within the penalty's reach of the floor (quadrature
+    /// points) or an obstacle (samples), and the smallest distance of the centre line
+    /// from either over the rod's radius (`None` without such contacts).
     pub(crate) fn obstacle_summary(&self, rod: &Rod) -> Result<(usize, Option<Real>), CoreError> {
         let (mut count, mut least) = (0, None::<Real>);
-        self.for_each_obstacle_point(rod, |p| {
+        self.for_each_surface_point(rod, |p| {
             count += 1;
             let ratio = (p.gap + p.radius) / p.radius;
             least = Some(least.map_or(ratio, |l| l.min(ratio)));

@@ -63,7 +63,7 @@ impl Contact {
     }
 
     /// Calls `f` at every point of the rod within reach of the floor, then of an obstacle.
-    fn for_each_surface_point(
+    pub(crate) fn for_each_surface_point(
         &self,
         rod: &Rod,
         mut f: impl FnMut(&PenaltyPoint<'_>),
