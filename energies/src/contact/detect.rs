@@ -163,6 +163,20 @@ impl Detector {
         out.int(u64::from(self.placed_all));
     }
 
+    /// Forgets what was made for the rod's former knots — the sample layout, the Verlet
+    /// list, the sample positions, the cached detection — after a knot change (a cut, an
+    /// adaptive insertion or removal). The next detection rebuilds all of it, as it would
+    /// anyway (each is keyed on the old topology, which never returns); forgetting it
+    /// keeps a checkpoint taken before that detection from saving a list laid out for
+    /// pieces the restored rod no longer has.
+    pub fn forget_topology(&mut self) {
+        self.layout = None;
+        self.cached = None;
+        self.skin.forget();
+        self.samples.position.clear();
+        self.placed_all = false;
+    }
+
     /// Reads back the Verlet list for `rod`, laying out its samples.
     pub fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
         *self = Self::default();
