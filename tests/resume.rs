@@ -335,10 +335,25 @@ fn foreign_and_damaged_checkpoints_are_refused() {
     let version = splinerod::run::checkpoint::VERSION;
     assert_eq!(u32::from(bytes[at]), version, "format version {version}");
     let mut old = bytes.clone();
-    old[at] = 0;
+    old[at] = 3;
     std::fs::write(&path, &old).expect("write");
-    assert!(refused("old").contains("format 0"));
+    let line = refused("old");
+    assert!(line.contains("no checksum (older format)") && line.contains("format 3"));
     std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
-    assert!(refused("truncated").contains("damaged"));
+    assert!(refused("truncated").contains("damaged: checksum mismatch"));
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() * 2 / 3] ^= 0x10;
+    std::fs::write(&path, &flipped).expect("write");
+    assert!(refused("one byte").contains("checksum mismatch"));
+    // The scene text edited in place (the same length), nothing else.
+    let text = std::fs::read_to_string(scene).expect("scene");
+    let from = "duration = 10.0";
+    assert!(text.contains(from));
+    let at = bytes.windows(from.len()).position(|w| w == from.as_bytes());
+    let mut edited = bytes.clone();
+    let at = at.expect("the scene text in the checkpoint");
+    edited[at..at + from.len()].copy_from_slice(b"duration = 90.0");
+    std::fs::write(&path, &edited).expect("write");
+    assert!(refused("edited scene").contains("scene hash mismatch"));
     std::fs::remove_dir_all(&d).ok();
 }
