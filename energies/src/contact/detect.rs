@@ -163,12 +163,10 @@ impl Detector {
         out.int(u64::from(self.placed_all));
     }
 
-    /// Forgets what was made for the rod's former knots — the sample layout, the Verlet
-    /// list, the sample positions, the cached detection — after a knot change (a cut, an
-    /// adaptive insertion or removal). The next detection rebuilds all of it, as it would
-    /// anyway (each is keyed on the old topology, which never returns); forgetting it
-    /// keeps a checkpoint taken before that detection from saving a list laid out for
-    /// pieces the restored rod no longer has.
+    /// Forgets what was made for the rod's former knots (sample layout, Verlet list,
+    /// sample positions, cached detection) after a knot change. The next detection
+    /// rebuilds them anyway (they are keyed on the old topology); a checkpoint taken
+    /// before it then saves no list laid out for pieces the restored rod lacks.
     pub fn forget_topology(&mut self) {
         self.layout = None;
         self.cached = None;
