@@ -3,8 +3,8 @@
 //! DIR` writes the same JSON, stats CSV and ParaView files as the run never stopped, bit
 //! for bit but for wall-clock times — for every integrator, an adaptive scene, a scene
 //! with cuts, contact with friction, twist, several rods, an ensemble (and a shard of
-//! it) and a static solve. Foreign and
-//! damaged checkpoints are refused with one line.
+//! it) and a static solve, also when stopped on the step of a cut or of a knot change.
+//! Foreign and damaged checkpoints are refused with one line.
 
 mod common;
 
@@ -150,6 +150,83 @@ fn adaptive_cut_and_twist_scenes_resume_exactly() {
     resumes_exactly("twist", &twist, &[123]);
 }
 
+/// A free rod with contact and a floor, cut at 0.883 at t = 0.05 s (step 50): the cut
+/// changes the contact samples' layout. Here the outputs (the stats' contact energy)
+/// detect contact again after the cut; `tests/checkpoints.rs` takes the same checkpoint
+/// without outputs, the case that once failed ("contact samples of another rod").
+const FREE_CUT: &str = r#"
+[rod]
+rest_length = 1.0
+linear_density = 0.1
+stretch_stiffness = 100.0
+damping = 0.5
+control_points = 10
+start = [0.0, 0.0, 0.0]
+end = [1.0, 0.0, 0.2]
+radius = 0.01
+
+[[cuts]]
+at = 0.883
+time = 0.05
+
+[contact]
+stiffness = 1e5
+floor = -0.05
+
+[solver]
+method = "implicit-euler"
+dt = 0.001
+duration = 0.2
+"#;
+
+/// The steps (1-based) after which the control points' count changed, from a run's
+/// stats: the first `count` of them.
+fn knot_change_steps(test: &str, scene: &Path, count: usize) -> Vec<usize> {
+    let d = dir(&format!("{test}-steps"));
+    let csv = d.join("s.csv");
+    ok(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--stats",
+        csv.to_str().unwrap(),
+    ]);
+    let rows = stats(&csv);
+    let column = rows[0].iter().position(|c| c == "control_points");
+    let column = column.expect("control_points column");
+    let points: Vec<usize> = rows[1..]
+        .iter()
+        .map(|r| r[column].parse().unwrap())
+        .collect();
+    let changed = (1..points.len()).filter(|&i| points[i] != points[i - 1]);
+    let steps: Vec<usize> = changed.map(|i| i + 1).take(count).collect();
+    std::fs::remove_dir_all(&d).ok();
+    assert_eq!(steps.len(), count, "{test}: too few knot changes");
+    steps
+}
+
+#[test]
+fn checkpoints_on_the_steps_of_cuts_and_knot_changes_resume_exactly() {
+    let d = dir("cut-steps");
+    let free = d.join("free_cut.toml");
+    std::fs::write(&free, FREE_CUT).expect("scene written");
+    resumes_exactly("free-cut", &free, &[49, 50, 51]);
+    let contact = variant(
+        &d,
+        "cut_contact.toml",
+        &[("duration = 2.0", "duration = 0.7")],
+    );
+    resumes_exactly("cut-contact", &contact, &[200, 400, 600]);
+    // Insertions and removals (grab), insertions with self-contact (knot).
+    let grab = Path::new("scenes/grab_adaptive.toml");
+    resumes_exactly("grab-steps", grab, &knot_change_steps("grab", grab, 6));
+    let knot = variant(
+        &d,
+        "knot_tying_adaptive.toml",
+        &[("duration = 3.0", "duration = 0.3")],
+    );
+    resumes_exactly("knot-steps", &knot, &knot_change_steps("knot", &knot, 4));
+}
+
 #[test]
 fn contact_with_friction_resumes_exactly() {
     let d = dir("friction");
@@ -258,10 +335,25 @@ fn foreign_and_damaged_checkpoints_are_refused() {
     let version = splinerod::run::checkpoint::VERSION;
     assert_eq!(u32::from(bytes[at]), version, "format version {version}");
     let mut old = bytes.clone();
-    old[at] = 0;
+    old[at] = 3;
     std::fs::write(&path, &old).expect("write");
-    assert!(refused("old").contains("format 0"));
+    let line = refused("old");
+    assert!(line.contains("no checksum (older format)") && line.contains("format 3"));
     std::fs::write(&path, &bytes[..bytes.len() / 2]).expect("write");
-    assert!(refused("truncated").contains("damaged"));
+    assert!(refused("truncated").contains("damaged: checksum mismatch"));
+    let mut flipped = bytes.clone();
+    flipped[bytes.len() * 2 / 3] ^= 0x10;
+    std::fs::write(&path, &flipped).expect("write");
+    assert!(refused("one byte").contains("checksum mismatch"));
+    // The scene text edited in place (the same length), nothing else.
+    let text = std::fs::read_to_string(scene).expect("scene");
+    let from = "duration = 10.0";
+    assert!(text.contains(from));
+    let at = bytes.windows(from.len()).position(|w| w == from.as_bytes());
+    let mut edited = bytes.clone();
+    let at = at.expect("the scene text in the checkpoint");
+    edited[at..at + from.len()].copy_from_slice(b"duration = 90.0");
+    std::fs::write(&path, &edited).expect("write");
+    assert!(refused("edited scene").contains("scene hash mismatch"));
     std::fs::remove_dir_all(&d).ok();
 }

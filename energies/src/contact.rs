@@ -59,7 +59,9 @@ use pair::pair_rows;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::rod::{non_negative, positive};
-use splinerod_core::{BlockBanded, CoreError, HessianKind, Real, Rod, SavedState, StateReader};
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod, SavedState, StateReader,
+};
 use std::sync::{Mutex, MutexGuard};
 
 /// Settings of [`Contact`]. All lengths in m.
@@ -437,6 +439,11 @@ impl Energy for Contact {
 
     fn drive(&mut self, t: Real) {
         self.move_obstacles(t);
+    }
+
+    fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.forget_topology();
     }
 
     fn save_state(&self, out: &mut SavedState) {

@@ -2,9 +2,10 @@
 //! turning of the normal) is the derivative of the gradient, and a detection that reuses
 //! its Verlet list along a trajectory finds what a fresh detector finds — energy,
 //! gradient, Hessian, contact summary and closest points — for small moves (list kept)
-//! and large ones (list rebuilt).
+//! and large ones (list rebuilt). A state saved after a cut, before the next detection
+//! (a checkpoint on the step of a cut), loads on the cut rod and detects alike.
 use nalgebra::{DMatrix, Vector3};
-use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod};
+use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod, SavedState};
 use splinerod_energies::{Contact, ContactParams, Energy};
 
 const R: Real = 0.003;
@@ -180,4 +181,26 @@ fn reused_equals_fresh(spacing: Real) {
         assert_eq!(points(&fresh), points(&reused), "step {k}: closest points");
         assert_eq!(n, rod.len());
     }
+}
+
+#[test]
+fn a_state_saved_after_a_cut_loads_on_the_cut_rod() {
+    let (mut c, mut rod) = (contact(), coil());
+    assert!(
+        c.summary(&rod).expect("summary").pairs > 0,
+        "detected uncut"
+    );
+    let at = 0.883 * rod.material().rest_length;
+    rod.cut_with(at, &mut |r, map| c.on_knot_change(r, map))
+        .expect("cut");
+    let mut saved = SavedState::default();
+    c.save_state(&mut saved);
+    let mut restored = contact();
+    let mut reader = saved.reader();
+    restored
+        .load_state(&rod, &mut reader)
+        .expect("loads on the cut rod");
+    reader.finish().expect("read to its end");
+    assert!(c.summary(&rod).expect("summary") == restored.summary(&rod).expect("summary"));
+    assert!(gradient(&c, &rod) == gradient(&restored, &rod));
 }

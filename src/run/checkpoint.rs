@@ -11,12 +11,20 @@
 //! after the checkpoint.
 //!
 //! **Format.** `DIR/checkpoint.bin`: a [postcard] header (`"splinerod-checkpoint"`, the
-//! format version [`VERSION`], the splinerod version that wrote it) followed by the
-//! checkpoint, both through serde. A file of another format or version is refused with
-//! a message saying so; so is one written by another splinerod version (the results
-//! would not be bit-identical across builds that change the numerics). Writing is
-//! atomic: a temporary file is written, flushed to disk (`fsync`) and renamed over the
-//! previous checkpoint, so a crash while writing leaves the previous one intact.
+//! format version [`VERSION`], the splinerod version that wrote it), the checkpoint
+//! (postcard, through serde; it holds the scene's text and the [`fnv1a64`] hash of that
+//! text), then 8 bytes: the [`fnv1a64`] checksum of every byte before them,
+//! little-endian. A file of another format or version is refused with a message saying
+//! so (one of an older format, which has no checksum, says that); so is one written by
+//! another splinerod version (the results would not be bit-identical across builds that
+//! change the numerics). Then the file's integrity is checked, and a failure refused
+//! naming it: a scene text that does not match its hash (edited or damaged), a checksum
+//! mismatch (any other damage: the checksum covers the whole file, so a field added to
+//! the format later is covered too), or content that does not decode (malformed) under
+//! a checksum that matches. FNV-1a changes its hash at every single-byte change, so any
+//! one damaged byte is refused. Writing is atomic: a temporary file is written, flushed
+//! to disk (`fsync`) and renamed over the previous checkpoint, so a crash while writing
+//! leaves the previous one intact.
 
 use crate::run::tally::Tally;
 use crate::world::saved::SimulationState;
@@ -29,8 +37,12 @@ use std::path::{Path, PathBuf};
 /// Format version of checkpoint files; a file of another version is refused (2: the
 /// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
 /// at the start of the last step, so that a run resumed at its end reports the same
-/// final error estimate).
-pub const VERSION: u32 = 3;
+/// final error estimate; 4: the checksum over the file and the scene text's hash).
+pub const VERSION: u32 = 4;
+/// The first format version with a checksum; older files are refused as such.
+const FIRST_CHECKSUMMED: u32 = 4;
+/// Bytes of the checksum at the end of the file.
+const CHECKSUM_BYTES: usize = 8;
 /// The checkpoint's file name inside its directory.
 pub const FILE: &str = "checkpoint.bin";
 const FORMAT: &str = "splinerod-checkpoint";
@@ -69,6 +81,8 @@ pub(crate) struct MemberState {
 #[derive(Debug, Serialize, Deserialize)]
 pub(crate) struct Checkpoint {
     pub scene: String,
+    /// [`fnv1a64`] of `scene`'s bytes.
+    pub scene_hash: u64,
     pub args: Vec<String>,
     /// The ensemble members run, if a shard's, and the shard (K, N).
     pub only: Option<(usize, usize)>,
@@ -105,6 +119,8 @@ pub(crate) fn write(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Error> {
     let encode = |e: postcard::Error| refused(dir, format!("could not encode: {e}"));
     let mut bytes = postcard::to_stdvec(&header).map_err(encode)?;
     bytes.extend(postcard::to_stdvec(checkpoint).map_err(encode)?);
+    let checksum = fnv1a64(&bytes);
+    bytes.extend(checksum.to_le_bytes());
     let path = dir.join(FILE);
     let temporary = dir.join(format!("{FILE}.tmp"));
     let mut file = std::fs::File::create(&temporary).map_err(io(&temporary))?;
@@ -119,7 +135,8 @@ pub(crate) fn write(dir: &Path, checkpoint: &Checkpoint) -> Result<(), Error> {
     Ok(())
 }
 
-/// Reads the checkpoint in `dir`, refusing a foreign or old one.
+/// Reads the checkpoint in `dir`, refusing a foreign, old, damaged or edited one
+/// (module docs).
 pub(crate) fn read(dir: &Path) -> Result<Checkpoint, Error> {
     let path = dir.join(FILE);
     let bytes = std::fs::read(&path).map_err(io(&path))?;
@@ -128,16 +145,67 @@ pub(crate) fn read(dir: &Path) -> Result<Checkpoint, Error> {
     if header.format != FORMAT {
         return Err(foreign());
     }
-    if header.version != VERSION || header.build != env!("CARGO_PKG_VERSION") {
+    let this = env!("CARGO_PKG_VERSION");
+    if header.version < FIRST_CHECKSUMMED {
         let reason = format!(
-            "written by splinerod {} (checkpoint format {}); this is splinerod {} (format {VERSION}): resume it with the version that wrote it",
-            header.build,
-            header.version,
-            env!("CARGO_PKG_VERSION")
+            "no checksum (older format): written by splinerod {} in checkpoint format {}; this is splinerod {this} (format {VERSION}), which resumes only checksummed checkpoints: resume it with the version that wrote it",
+            header.build, header.version
         );
         return Err(refused(&path, reason));
     }
-    postcard::from_bytes(rest).map_err(|e| refused(&path, format!("damaged: {e}")))
+    if header.version != VERSION || header.build != this {
+        let reason = format!(
+            "written by splinerod {} (checkpoint format {}); this is splinerod {this} (format {VERSION}): resume it with the version that wrote it",
+            header.build, header.version
+        );
+        return Err(refused(&path, reason));
+    }
+    let Some(body_len) = rest.len().checked_sub(CHECKSUM_BYTES) else {
+        return Err(refused(&path, "damaged: too short to hold its checksum"));
+    };
+    let (body, trailer) = rest.split_at(body_len);
+    let mut stored = [0; CHECKSUM_BYTES];
+    stored.copy_from_slice(trailer);
+    let content = &bytes[..bytes.len() - CHECKSUM_BYTES];
+    let (stored, computed) = (u64::from_le_bytes(stored), fnv1a64(content));
+    let decoded = match postcard::take_from_bytes::<Checkpoint>(body) {
+        Ok((c, [])) => Ok(c),
+        Ok((_, extra)) => Err(format!("{} bytes past its end", extra.len())),
+        Err(e) => Err(e.to_string()),
+    };
+    match decoded {
+        Ok(c) if fnv1a64(c.scene.as_bytes()) != c.scene_hash => {
+            let reason = format!(
+                "scene hash mismatch: the scene text it holds hashes to {:016x}, not to the {:016x} it was written with (edited or damaged)",
+                fnv1a64(c.scene.as_bytes()),
+                c.scene_hash
+            );
+            Err(refused(&path, reason))
+        }
+        _ if stored != computed => {
+            let reason = format!(
+                "damaged: checksum mismatch (the file's content hashes to {computed:016x}, its checksum says {stored:016x})"
+            );
+            Err(refused(&path, reason))
+        }
+        Ok(c) => Ok(c),
+        Err(e) => Err(refused(
+            &path,
+            format!("malformed field under a matching checksum: {e}"),
+        )),
+    }
+}
+
+/// The 64-bit FNV-1a hash of `bytes` (Fowler–Noll–Vo; offset basis
+/// `0xcbf29ce484222325`, prime `0x100000001b3`): the checkpoint's checksum and scene
+/// hash. Every step `h ← (h ⊕ byte) · prime` is a bijection of `h` for each byte and
+/// of the byte for each `h`, so changing any one byte changes the hash.
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    const BASIS: u64 = 0xcbf2_9ce4_8422_2325;
+    const PRIME: u64 = 0x0000_0100_0000_01b3;
+    bytes
+        .iter()
+        .fold(BASIS, |h, &b| (h ^ u64::from(b)).wrapping_mul(PRIME))
 }
 
 /// What `splinerod resume` needs to know of the run checkpointed in a directory.
@@ -158,4 +226,17 @@ pub fn resumable(dir: &Path) -> Result<Resumable, Error> {
         args: c.args,
         shard: c.shard,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fnv1a64;
+
+    #[test]
+    fn fnv1a64_matches_the_reference_vectors() {
+        // From the FNV reference test suite (isthe.com/chongo/tech/comp/fnv).
+        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a64(b"foobar"), 0x8594_4171_f739_67e8);
+    }
 }

@@ -338,6 +338,7 @@ fn save(
     let members = run.members.iter().zip(&run.ensemble.members);
     let checkpoint = Checkpoint {
         scene: plan.scene.clone(),
+        scene_hash: crate::run::checkpoint::fnv1a64(plan.scene.as_bytes()),
         args: plan.args.clone(),
         only: run.only.as_ref().map(|r| (r.start, r.end)),
         shard: plan.shard,

@@ -163,6 +163,18 @@ impl Detector {
         out.int(u64::from(self.placed_all));
     }
 
+    /// Forgets what was made for the rod's former knots (sample layout, Verlet list,
+    /// sample positions, cached detection) after a knot change. The next detection
+    /// rebuilds them anyway (they are keyed on the old topology); a checkpoint taken
+    /// before it then saves no list laid out for pieces the restored rod lacks.
+    pub fn forget_topology(&mut self) {
+        self.layout = None;
+        self.cached = None;
+        self.skin.forget();
+        self.samples.position.clear();
+        self.placed_all = false;
+    }
+
     /// Reads back the Verlet list for `rod`, laying out its samples.
     pub fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
         *self = Self::default();

@@ -101,6 +101,18 @@ impl Skin {
         Ok(())
     }
 
+    /// Empties the list (its samples and segments belong to former knots; see
+    /// [`Detector::forget_topology`](super::detect::Detector::forget_topology)).
+    pub fn forget(&mut self) {
+        self.key = None;
+        self.margin = 0.0;
+        self.reference.clear();
+        self.near.clear();
+        self.groups.clear();
+        self.segments.clear();
+        self.samples.clear();
+    }
+
     /// The `[segment, spacing]` of the detection the list was made for, if any.
     pub fn layout(&self) -> Option<[Real; 2]> {
         self.key.map(|(_, s)| [s[2], s[3]])
