@@ -86,6 +86,7 @@ pub use world::system::{Load, PinDriver, RodSystem};
 
 pub use splinerod_adaptivity as adaptivity;
 pub use splinerod_core as core;
+pub use splinerod_core::kernels;
 pub use splinerod_energies as energies;
 pub use splinerod_integrators as integrators;
 

@@ -14,7 +14,9 @@
 //! format version [`VERSION`], the splinerod version that wrote it) followed by the
 //! checkpoint, both through serde. A file of another format or version is refused with
 //! a message saying so; so is one written by another splinerod version (the results
-//! would not be bit-identical across builds that change the numerics). Writing is
+//! would not be bit-identical across builds that change the numerics), and one written
+//! under another kernel set ([`splinerod_core::kernels`]: the fused and the plain
+//! kernels round differently), the message naming both sets. Writing is
 //! atomic: a temporary file is written, flushed to disk (`fsync`) and renamed over the
 //! previous checkpoint, so a crash while writing leaves the previous one intact.
 
@@ -29,8 +31,8 @@ use std::path::{Path, PathBuf};
 /// Format version of checkpoint files; a file of another version is refused (2: the
 /// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
 /// at the start of the last step, so that a run resumed at its end reports the same
-/// final error estimate).
-pub const VERSION: u32 = 3;
+/// final error estimate; 4: the kernel set).
+pub const VERSION: u32 = 4;
 /// The checkpoint's file name inside its directory.
 pub const FILE: &str = "checkpoint.bin";
 const FORMAT: &str = "splinerod-checkpoint";
@@ -68,6 +70,8 @@ pub(crate) struct MemberState {
 /// The whole run between two stages (module docs).
 #[derive(Debug, Serialize, Deserialize)]
 pub(crate) struct Checkpoint {
+    /// The kernel set of the process that wrote it ([`splinerod_core::kernels::name`]).
+    pub kernels: String,
     pub scene: String,
     pub args: Vec<String>,
     /// The ensemble members run, if a shard's, and the shard (K, N).
@@ -137,7 +141,19 @@ pub(crate) fn read(dir: &Path) -> Result<Checkpoint, Error> {
         );
         return Err(refused(&path, reason));
     }
-    postcard::from_bytes(rest).map_err(|e| refused(&path, format!("damaged: {e}")))
+    let checkpoint: Checkpoint =
+        postcard::from_bytes(rest).map_err(|e| refused(&path, format!("damaged: {e}")))?;
+    let running = splinerod_core::kernels::name();
+    if checkpoint.kernels != running {
+        let reason = format!(
+            "written under the \"{}\" kernel set; this process runs \"{running}\" \
+             ({}), whose results differ at round-off: resume it under the set that wrote it",
+            checkpoint.kernels,
+            splinerod_core::kernels::ENV
+        );
+        return Err(refused(&path, reason));
+    }
+    Ok(checkpoint)
 }
 
 /// What `splinerod resume` needs to know of the run checkpointed in a directory.

@@ -337,6 +337,7 @@ fn save(
 ) -> Result<(), Error> {
     let members = run.members.iter().zip(&run.ensemble.members);
     let checkpoint = Checkpoint {
+        kernels: splinerod_core::kernels::name().to_string(),
         scene: plan.scene.clone(),
         args: plan.args.clone(),
         only: run.only.as_ref().map(|r| (r.start, r.end)),

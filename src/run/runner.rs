@@ -163,6 +163,9 @@ pub struct RodModel {
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunResult {
+    /// The kernel set that computed it (`"portable"` or `"avx2-fma"`,
+    /// [`splinerod_core::kernels`]): results are bit-identical only under one set.
+    pub kernels: &'static str,
     /// Simulated time at the end, s.
     pub time: Real,
     /// Time steps taken (0 for a static solve).
@@ -390,6 +393,7 @@ pub(crate) fn finish(
     let pin_forces = scene_pin_forces(scene, sim);
     let forms = scene.stretch_formulations_used()?;
     Ok(RunResult {
+        kernels: splinerod_core::kernels::name(),
         time: sim.time,
         steps: sim.steps,
         control_points: rod.distinct_len(),

@@ -8,7 +8,10 @@
 //!
 //! A shard's JSON is a run's JSON whose top-level fields describe its first member, plus
 //! `shard` (`index`, `count`, `members` as `[start, end)`, and `scene`, a fingerprint of
-//! the parsed scene, so shards of different scenes are never merged).
+//! the parsed scene, so shards of different scenes are never merged). Like every result
+//! it records the kernel set that computed it (`kernels`, [`splinerod_core::kernels`]):
+//! the bits above hold under one set, so shards of different sets are not merged
+//! either (the error names both sets).
 
 use crate::run::runner::SolverTotals;
 use crate::{Error, Scene};
@@ -117,6 +120,7 @@ pub fn merge(shards: &[Value]) -> Result<Value, Error> {
         ));
     };
     let (count, scene) = (first.count, first.scene.clone());
+    same_kernels(shards, &infos)?;
     let mut next = 0;
     for (k, (info, i)) in infos.iter().enumerate() {
         if info.count != count || info.scene != scene {
@@ -164,6 +168,38 @@ fn combine(ordered: &[&Value]) -> Result<Value, Error> {
         }
     }
     Ok(merged)
+}
+
+/// Refuses shards computed under different kernel sets (or recording none), naming
+/// both sets; `infos` are the shards' records with their file positions, shard 1 first.
+fn same_kernels(shards: &[Value], infos: &[(ShardInfo, usize)]) -> Result<(), Error> {
+    let kernels = |i: usize| shards[i].get("kernels").and_then(Value::as_str);
+    let first = infos[0].1;
+    let Some(set) = kernels(first) else {
+        return Err(shard_error(
+            first,
+            "records no kernel set (`kernels`): written by an older splinerod",
+        ));
+    };
+    for &(_, i) in &infos[1..] {
+        match kernels(i) {
+            Some(other) if other == set => {}
+            Some(other) => {
+                let reason = format!(
+                    "shards computed under different kernel sets: file {} \"{set}\", file {} \"{other}\"; their results differ at round-off: run every shard under one set ({})",
+                    first + 1,
+                    i + 1,
+                    splinerod_core::kernels::ENV
+                );
+                return Err(Error::field("merge", format!("file {}", i + 1), reason));
+            }
+            None => {
+                let reason = "records no kernel set (`kernels`): written by an older splinerod";
+                return Err(shard_error(i, reason));
+            }
+        }
+    }
+    Ok(())
 }
 
 fn shard_error(i: usize, reason: &str) -> Error {
