@@ -31,7 +31,8 @@ use std::path::{Path, PathBuf};
 /// Format version of checkpoint files; a file of another version is refused (2: the
 /// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
 /// at the start of the last step, so that a run resumed at its end reports the same
-/// final error estimate; 4: the kernel set).
+/// final error estimate; 4: the kernel set, and the solver totals' steps solved alone
+/// per reason).
 pub const VERSION: u32 = 4;
 /// The checkpoint's file name inside its directory.
 pub const FILE: &str = "checkpoint.bin";

@@ -12,6 +12,11 @@
 //! it records the kernel set that computed it (`kernels`, [`splinerod_core::kernels`]):
 //! the bits above hold under one set, so shards of different sets are not merged
 //! either (the error names both sets).
+//!
+//! A member computes the same bits whichever shard it lands in, for any `N`: the
+//! batched step's groups follow the whole ensemble's numbering and a member's lanes
+//! never depend on its lane-mates (`world/lanes.rs`). `N` may be at most the number of
+//! members; more is refused for every `K`.
 
 use crate::run::runner::SolverTotals;
 use crate::{Error, Scene};
@@ -57,9 +62,10 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
-    /// The members of this shard in an ensemble of `total`: a contiguous block, the
-    /// blocks of shards 1..N in order covering `0..total`. Errors when `scene` has no
-    /// `[ensemble]` or the shard would be empty.
+    /// The members of this shard in an ensemble of `total`: a contiguous block of at
+    /// least one member, the blocks of shards 1..N in order covering `0..total`. Errors
+    /// when `scene` has no `[ensemble]` or has fewer members than shards (then for every
+    /// K alike, so that a set of shards either all run or none does).
     pub fn members(&self, scene: &Scene) -> Result<Range<usize>, Error> {
         let field = "--shard";
         let given = format!("{}/{}", self.index, self.count);
@@ -71,12 +77,15 @@ impl Shard {
             ));
         };
         let (k, n) = (self.index, self.count);
-        let range = (k - 1) * total / n..k * total / n;
-        if range.is_empty() {
-            let reason = format!("the ensemble has {total} members: shards would be empty");
+        if n > total {
+            let reason = format!(
+                "{n} shards but the ensemble has {total} members: give at most {total} shards (each runs at least one member)"
+            );
             return Err(Error::field(field, given, reason));
         }
-        Ok(range)
+        // With n ≤ total every block holds at least one member. In u128: no overflow.
+        let bound = |j: usize| (j as u128 * total as u128 / n as u128) as usize;
+        Ok(bound(k - 1)..bound(k))
     }
 
     /// The record of this shard of `scene` with `members`.

@@ -205,6 +205,7 @@ impl Simulation {
             substeps,
             energies: self.system.summary()?,
             error_estimate,
+            unbatched: None,
         })
     }
 
