@@ -83,9 +83,11 @@ pub use world::grab::Grab;
 pub use world::simulation::Simulation;
 pub use world::step_report::{StageTimes, StepReport};
 pub use world::system::{Load, PinDriver, RodSystem};
+pub use world::unbatched::{Unbatched, UnbatchedCounts};
 
 pub use splinerod_adaptivity as adaptivity;
 pub use splinerod_core as core;
+pub use splinerod_core::kernels;
 pub use splinerod_energies as energies;
 pub use splinerod_integrators as integrators;
 

@@ -165,12 +165,15 @@ pub fn fma<const FUSED: bool>(acc: &mut Lanes, a: Lanes, b: Lanes) {
     }
 }
 
-/// Whether this processor runs the wide kernels: AVX2 (four lanes per instruction)
-/// with fused multiply-add. Detected once.
+/// Whether this process runs the wide kernels: AVX2 (four lanes per instruction) with
+/// fused multiply-add. The one switch every kernel with two instances branches on:
+/// true exactly when the process's kernel set ([`crate::kernels::active`], chosen once
+/// from `SPLINEROD_KERNELS`) is [`crate::kernels::KernelSet::Avx2Fma`], which implies
+/// the processor has both.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub fn wide() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    crate::kernels::active() == crate::kernels::KernelSet::Avx2Fma
 }
 
 #[cfg(test)]

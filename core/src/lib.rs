@@ -39,6 +39,7 @@ pub mod bspline;
 pub mod check;
 mod cutting;
 mod error;
+pub mod kernels;
 pub mod keyframes;
 pub mod knot_map;
 pub mod lanes;

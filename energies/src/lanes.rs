@@ -68,22 +68,24 @@ impl LaneTerm<'_> {
 pub type LaneField = [Lanes];
 
 /// Adds to `energy` each lane's energy of `terms` at the positions `q`, and with
-/// `derivatives` its gradient and exact Hessian. No allocation. Returns false, adding
-/// nothing, if the terms are not one form on one shape fitting `q` and the derivatives'
-/// sizes ([`LaneTerm::compatible`]).
+/// `derivatives` its gradient and exact Hessian. No allocation. Returns per lane whether
+/// it was evaluated: every lane false, adding nothing, if the terms are not one form on
+/// one shape fitting `q` and the derivatives' sizes ([`LaneTerm::compatible`]); a lane
+/// false where its stretching's projection guard acts (the lanes do not replicate it;
+/// each lane tested alone).
 pub fn add_lanes(
     terms: &[LaneTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
     derivatives: Option<Derivatives<'_>>,
-) -> bool {
+) -> [bool; LANES] {
     let n = q.len() / 3;
     let (bw, sized) = derivatives.as_ref().map_or((usize::MAX - 1, true), |d| {
         let h = &d.hessian;
         (h.bandwidth(), h.dim() == n && d.gradient.len() == q.len())
     });
     if !(sized && q.len() == 3 * n && LaneTerm::compatible(terms, n, bw)) {
-        return false;
+        return [false; LANES];
     }
     match &terms[0] {
         LaneTerm::Gravity { .. } => add_gravity(terms, q, energy, derivatives.map(|d| d.gradient)),
@@ -106,7 +108,7 @@ pub fn add_lanes(
             crate::bending::add_bending_lanes(bending, q, energy, derivatives);
         }
     }
-    true
+    [true; LANES]
 }
 
 /// Gravity's energy and gradient, lane by lane.
@@ -203,7 +205,10 @@ mod tests {
             hessian: &mut band,
             hessian_scale: 1.0,
         };
-        assert!(add_lanes(&terms, &q, &mut energy, Some(derivatives)));
+        assert_eq!(
+            add_lanes(&terms, &q, &mut energy, Some(derivatives)),
+            [true; LANES]
+        );
         for (l, (rod, e)) in rods.iter().zip(energies).enumerate() {
             let close = |a: Real, b: Real, scale: Real| (a - b).abs() <= 1e-12 * scale;
             assert!(
@@ -292,7 +297,7 @@ mod tests {
             .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
             .collect();
         let mut energy = [0.0; LANES];
-        assert!(!add_lanes(&terms, &q, &mut energy, None));
+        assert_eq!(add_lanes(&terms, &q, &mut energy, None), [false; LANES]);
         assert_eq!(energy, [0.0; LANES], "nothing added");
         // With gentler bends the guard is idle and the lanes take the rods.
         let rods = wiggly_rods(3, 0.05);
@@ -306,6 +311,43 @@ mod tests {
             })
             .collect();
         check(&rods, &energies);
+    }
+
+    /// The guard refuses a lane on its own: lanes whose guard is idle are evaluated,
+    /// with the same bits as beside other lane-mates.
+    #[test]
+    fn the_guard_refuses_lanes_one_by_one() {
+        let (bent, gentle) = (wiggly_rods(3, 1.0), wiggly_rods(3, 0.05));
+        let energy_of = |rods: &[&Rod]| {
+            let energies: Vec<Stretching> = rods
+                .iter()
+                .map(|rod| {
+                    let mut s = Stretching::new(80.0).expect("stretching");
+                    s.guard = true;
+                    s.begin_step(rod, 1e-3).expect("table");
+                    s
+                })
+                .collect();
+            let terms: [LaneTerm<'_>; LANES] =
+                std::array::from_fn(|l| energies[l].lane_term(rods[l]).expect("lane form"));
+            let n = rods[0].len();
+            let q: Vec<Lanes> = (0..3 * n)
+                .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
+                .collect();
+            let mut energy = [0.0; LANES];
+            let evaluated = add_lanes(&terms, &q, &mut energy, None);
+            (evaluated, energy)
+        };
+        let mixed: Vec<&Rod> = (0..LANES)
+            .map(|l| if l % 2 == 0 { &bent[l] } else { &gentle[l] })
+            .collect();
+        let (evaluated, energy) = energy_of(&mixed);
+        assert_eq!(evaluated, [false, true, false, true]);
+        let (all, alone) = energy_of(&gentle.iter().collect::<Vec<_>>());
+        assert_eq!(all, [true; LANES]);
+        for l in [1, 3] {
+            assert_eq!(energy[l].to_bits(), alone[l].to_bits(), "lane {l}");
+        }
     }
 
     #[test]

@@ -13,7 +13,8 @@ Run a scene::
 or build a rod in code (``Material``, ``BSplineSpace``, ``Rod``, ``Pin``, energies,
 integrators, ``RodSystem``, ``Simulation``). Bad input raises ``SceneError`` (a
 ``ValueError``) whose ``field`` names the field; a run that cannot go on raises
-``SplinerodError`` (a ``RuntimeError``).
+``SplinerodError`` (a ``RuntimeError``). ``kernels()`` names the kernel set the
+process computes with (``SPLINEROD_KERNELS``; results are bit-identical under one set).
 """
 
 from ._splinerod import (
@@ -41,6 +42,7 @@ from ._splinerod import (
     StaticSolver,
     Stretching,
     __version__,
+    kernels,
 )
 
 __all__ = [
@@ -68,4 +70,5 @@ __all__ = [
     "StaticSolver",
     "Stretching",
     "__version__",
+    "kernels",
 ]

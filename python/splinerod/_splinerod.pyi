@@ -7,10 +7,13 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver']
+__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver', 'kernels']
 
 _ArrayLike = npt.ArrayLike
 _Points = npt.NDArray[np.float64]
+
+def kernels() -> str:
+    """The kernel set this process computes with: "portable" or "avx2-fma"."""
 
 class SceneError(ValueError):
     """Bad input; `field` names the field (dotted path), `None` if no single one."""

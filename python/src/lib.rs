@@ -18,6 +18,18 @@ mod system;
 
 use pyo3::prelude::*;
 
+/// The kernel set this process computes with, `"portable"` or `"avx2-fma"` (chosen once
+/// from the environment variable `SPLINEROD_KERNELS`: `auto`, `portable` or
+/// `avx2-fma`); results are bit-identical only under one set. Raises `ValueError`
+/// naming the variable when its value is not understood (the fastest set runs then).
+#[pyfunction]
+fn kernels() -> PyResult<&'static str> {
+    match splinerod::kernels::setting_error() {
+        Some(message) => Err(pyo3::exceptions::PyValueError::new_err(message)),
+        None => Ok(splinerod::kernels::name()),
+    }
+}
+
 /// The compiled core of the `splinerod` package.
 #[pymodule]
 fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -46,5 +58,6 @@ fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<system::Bdf2>()?;
     m.add_class::<system::StaticSolver>()?;
     m.add_class::<adaptivity::Adaptivity>()?;
+    m.add_function(wrap_pyfunction!(kernels, m)?)?;
     Ok(())
 }

@@ -204,3 +204,11 @@ def test_code_built_static_solver_runs_once():
     assert sim.run() == 0
     sim.step()  # an explicit solve is still made
     assert abs(-sim.positions(0.5)[1] - 0.2687) < 1e-3
+
+
+def test_the_kernel_set_is_named_and_recorded_in_results():
+    # SPLINEROD_KERNELS chooses it once per process (scenes/README.md, "Kernel sets").
+    assert splinerod.kernels() in ("portable", "avx2-fma")
+    sim = hanging_cable().simulation()
+    sim.step(3)
+    assert sim.result()["kernels"] == splinerod.kernels()

@@ -7,7 +7,9 @@
 //! * `splinerod report [--quick] --out DIR`
 //! * `splinerod bench [--quick] [--json OUT]`
 //!
-//! Errors print one line naming the field or file and exit with code 2.
+//! Errors print one line naming the field or file and exit with code 2; so does a
+//! `SPLINEROD_KERNELS` value that is not understood, before any command runs (see
+//! `splinerod_core::kernels`: `auto`, `portable` or `avx2-fma`).
 
 use clap::{Args, Parser, Subcommand};
 use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
@@ -142,7 +144,12 @@ struct RunLine {
 const INTERRUPTED: u8 = 130;
 
 fn main() -> ExitCode {
-    match execute(Cli::parse()) {
+    let cli = Cli::parse();
+    if let Some(message) = splinerod::kernels::setting_error() {
+        eprintln!("error: {message}");
+        return ExitCode::from(2);
+    }
+    match execute(cli) {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");

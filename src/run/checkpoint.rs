@@ -25,6 +25,8 @@
 //! one damaged byte is refused. Writing is atomic: a temporary file is written, flushed
 //! to disk (`fsync`) and renamed over the previous checkpoint, so a crash while writing
 //! leaves the previous one intact.
+//! A checkpoint written under another kernel set ([`splinerod_core::kernels`]: the
+//! fused and the plain kernels round differently) is refused too, naming both sets.
 
 use crate::run::tally::Tally;
 use crate::world::saved::SimulationState;
@@ -37,7 +39,8 @@ use std::path::{Path, PathBuf};
 /// Format version of checkpoint files; a file of another version is refused (2: the
 /// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
 /// at the start of the last step, so that a run resumed at its end reports the same
-/// final error estimate; 4: the checksum over the file and the scene text's hash).
+/// final error estimate; 4: the checksum over the file and the scene text's hash, the
+/// kernel set, and the solver totals' steps solved alone per reason).
 pub const VERSION: u32 = 4;
 /// The first format version with a checksum; older files are refused as such.
 const FIRST_CHECKSUMMED: u32 = 4;
@@ -80,6 +83,8 @@ pub(crate) struct MemberState {
 /// The whole run between two stages (module docs).
 #[derive(Debug, Serialize, Deserialize)]
 pub(crate) struct Checkpoint {
+    /// The kernel set of the process that wrote it ([`splinerod_core::kernels::name`]).
+    pub kernels: String,
     pub scene: String,
     /// [`fnv1a64`] of `scene`'s bytes.
     pub scene_hash: u64,
@@ -188,7 +193,7 @@ pub(crate) fn read(dir: &Path) -> Result<Checkpoint, Error> {
             );
             Err(refused(&path, reason))
         }
-        Ok(c) => Ok(c),
+        Ok(c) => check_kernels(&path, c),
         Err(e) => Err(refused(
             &path,
             format!("malformed field under a matching checksum: {e}"),
@@ -206,6 +211,22 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
     bytes
         .iter()
         .fold(BASIS, |h, &b| (h ^ u64::from(b)).wrapping_mul(PRIME))
+}
+
+/// `checkpoint` if it was written under the kernel set this process runs; else refused
+/// naming both.
+fn check_kernels(path: &Path, checkpoint: Checkpoint) -> Result<Checkpoint, Error> {
+    let running = splinerod_core::kernels::name();
+    if checkpoint.kernels != running {
+        let reason = format!(
+            "written under the \"{}\" kernel set; this process runs \"{running}\" \
+             ({}), whose results differ at round-off: resume it under the set that wrote it",
+            checkpoint.kernels,
+            splinerod_core::kernels::ENV
+        );
+        return Err(refused(path, reason));
+    }
+    Ok(checkpoint)
 }
 
 /// What `splinerod resume` needs to know of the run checkpointed in a directory.

@@ -220,13 +220,13 @@ pub(crate) fn restored_run(
     })
 }
 
-/// The ensemble of `sims` (batched as `scene` says), numbered from the first member of
-/// `only` (a shard's), so that it batches its members as a run of the whole ensemble
-/// does.
+/// The ensemble of `sims` (batched as `scene`'s `[ensemble]` says; a single run is
+/// never batched), numbered from the first member of `only` (a shard's), so that it
+/// batches its members as a run of the whole ensemble does.
 fn ensemble_of(scene: &Scene, sims: Vec<Simulation>, only: Option<&Range<usize>>) -> Ensemble {
     let mut ensemble = Ensemble::new(sims);
     ensemble.first_index = only.map_or(0, |r| r.start);
-    ensemble.batched = scene.ensemble.as_ref().is_none_or(|e| e.batched);
+    ensemble.batched = scene.ensemble.as_ref().is_some_and(|e| e.batched);
     ensemble
 }
 
@@ -308,6 +308,10 @@ pub(crate) fn stage(
         reports,
         ..
     } = &mut run.ensemble;
+    if scene.ensemble.is_none() {
+        // A single run is no ensemble member: nothing to count as stepped alone.
+        reports.iter_mut().for_each(|r| r.unbatched = None);
+    }
     for ((m, sim), report) in run
         .members
         .iter_mut()
@@ -337,6 +341,7 @@ fn save(
 ) -> Result<(), Error> {
     let members = run.members.iter().zip(&run.ensemble.members);
     let checkpoint = Checkpoint {
+        kernels: splinerod_core::kernels::name().to_string(),
         scene: plan.scene.clone(),
         scene_hash: crate::run::checkpoint::fnv1a64(plan.scene.as_bytes()),
         args: plan.args.clone(),

@@ -14,4 +14,5 @@ pub mod session;
 pub mod shard;
 pub(crate) mod summary;
 pub(crate) mod tally;
+pub(crate) mod totals;
 pub(crate) mod twist;

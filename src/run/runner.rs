@@ -8,12 +8,11 @@ use crate::run::shard::{Shard, ShardInfo};
 use crate::run::tally::Tally;
 use crate::scene::Scene;
 use crate::world::estimate::EstimateOutput;
-use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
+use crate::{Error, RodSystem, Simulation, StageTimes};
 use serde::Serialize;
 use splinerod_core::Real;
 use splinerod_energies::ContactSummary;
 use std::collections::BTreeMap;
-use std::ops::AddAssign;
 
 /// Positions of evenly spaced material points at the end.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -38,43 +37,7 @@ pub struct Probe {
     pub positions: Vec<[Real; 3]>,
 }
 
-/// Solver counters summed over the run.
-#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
-pub struct SolverTotals {
-    /// Newton iterations (numeric factorisations).
-    pub newton_iterations: usize,
-    /// Symbolic analyses.
-    pub symbolic_analyses: usize,
-    /// Line-search step reductions.
-    pub line_search_cuts: usize,
-    /// Steps whose Newton iterations did not reach the tolerance (only with
-    /// `solver.accept_unconverged = true`; otherwise such a step is split).
-    pub unconverged_steps: usize,
-    /// Integrator steps accepted (sub-steps; equals `steps` when none was split).
-    pub substeps: usize,
-    /// Sub-steps rolled back and retried shorter.
-    pub rejected_steps: usize,
-    /// Shortest accepted sub-step, s (`null` for a static solve).
-    pub smallest_dt: Option<Real>,
-    /// Pseudo-transient continuation steps of a static solve whose Newton failed.
-    pub continuation_steps: usize,
-    /// Multiplier updates of an inextensible rod (static: until the mean strain of every
-    /// tension function is below 1e-12; dynamic: one per step).
-    pub multiplier_updates: usize,
-    /// Conjugate-gradient iterations correcting Newton steps for a Hessian remainder
-    /// (`stretch_formulation = "mixed-consistent"`; 0 otherwise).
-    pub remainder_iterations: usize,
-    /// Knots the adapt stage inserted.
-    pub knots_inserted: usize,
-    /// Knots the adapt stage removed.
-    pub knots_removed: usize,
-    /// Steps recomputed on a finer basis because their error estimate was rejected.
-    pub redone_steps: usize,
-    /// Steps whose solve an ensemble batched with other members' (four at a time, see
-    /// [`crate::Ensemble::batched`]); 0 for a single run.
-    #[serde(default)]
-    pub batched_steps: usize,
-}
+pub use crate::run::totals::SolverTotals;
 
 /// Contact over the run (scenes with `[contact]`).
 #[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
@@ -101,55 +64,6 @@ impl ContactStats {
     }
 }
 
-impl SolverTotals {
-    /// Adds one stage's counters; `timed`: a time step (a static solve has no sub-steps
-    /// or step lengths to count).
-    pub(crate) fn add(&mut self, report: &StepReport, timed: bool) {
-        let s = &report.solver;
-        self.newton_iterations += s.newton_iterations;
-        self.symbolic_analyses += s.symbolic_analyses;
-        self.line_search_cuts += s.line_search_cuts;
-        self.continuation_steps += s.continuation_steps;
-        self.multiplier_updates += s.multiplier_updates;
-        self.remainder_iterations += s.remainder_iterations;
-        self.batched_steps += s.batched;
-        self.knots_inserted += report.adapt.inserted;
-        self.knots_removed += report.adapt.removed;
-        self.redone_steps += report.adapt.redone_steps;
-        if !timed {
-            return;
-        }
-        self.unconverged_steps += usize::from(!s.converged);
-        self.substeps += report.substeps.substeps;
-        self.rejected_steps += report.substeps.rejected;
-        let h = report.substeps.smallest_dt;
-        self.smallest_dt = Some(self.smallest_dt.map_or(h, |s| s.min(h)));
-    }
-}
-
-/// Totals of several runs (an ensemble's members).
-impl AddAssign for SolverTotals {
-    fn add_assign(&mut self, o: SolverTotals) {
-        self.newton_iterations += o.newton_iterations;
-        self.symbolic_analyses += o.symbolic_analyses;
-        self.line_search_cuts += o.line_search_cuts;
-        self.unconverged_steps += o.unconverged_steps;
-        self.substeps += o.substeps;
-        self.rejected_steps += o.rejected_steps;
-        self.smallest_dt = match (self.smallest_dt, o.smallest_dt) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
-        self.continuation_steps += o.continuation_steps;
-        self.multiplier_updates += o.multiplier_updates;
-        self.remainder_iterations += o.remainder_iterations;
-        self.batched_steps += o.batched_steps;
-        self.knots_inserted += o.knots_inserted;
-        self.knots_removed += o.knots_removed;
-        self.redone_steps += o.redone_steps;
-    }
-}
-
 pub use crate::run::twist::TwistOutput;
 
 /// How a rod was modelled (JSON `rod`).
@@ -163,6 +77,9 @@ pub struct RodModel {
 /// Everything `splinerod run` reports.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunResult {
+    /// The kernel set that computed it (`"portable"` or `"avx2-fma"`,
+    /// [`splinerod_core::kernels`]): results are bit-identical only under one set.
+    pub kernels: &'static str,
     /// Simulated time at the end, s.
     pub time: Real,
     /// Time steps taken (0 for a static solve).
@@ -390,6 +307,7 @@ pub(crate) fn finish(
     let pin_forces = scene_pin_forces(scene, sim);
     let forms = scene.stretch_formulations_used()?;
     Ok(RunResult {
+        kernels: splinerod_core::kernels::name(),
         time: sim.time,
         steps: sim.steps,
         control_points: rod.distinct_len(),

@@ -8,7 +8,15 @@
 //!
 //! A shard's JSON is a run's JSON whose top-level fields describe its first member, plus
 //! `shard` (`index`, `count`, `members` as `[start, end)`, and `scene`, a fingerprint of
-//! the parsed scene, so shards of different scenes are never merged).
+//! the parsed scene, so shards of different scenes are never merged). Like every result
+//! it records the kernel set that computed it (`kernels`, [`splinerod_core::kernels`]):
+//! the bits above hold under one set, so shards of different sets are not merged
+//! either (the error names both sets).
+//!
+//! A member computes the same bits whichever shard it lands in, for any `N`: the
+//! batched step's groups follow the whole ensemble's numbering and a member's lanes
+//! never depend on its lane-mates (`world/lanes.rs`). `N` may be at most the number of
+//! members; more is refused for every `K`.
 
 use crate::run::runner::SolverTotals;
 use crate::{Error, Scene};
@@ -54,9 +62,10 @@ impl Shard {
         Ok(Shard { index, count })
     }
 
-    /// The members of this shard in an ensemble of `total`: a contiguous block, the
-    /// blocks of shards 1..N in order covering `0..total`. Errors when `scene` has no
-    /// `[ensemble]` or the shard would be empty.
+    /// The members of this shard in an ensemble of `total`: a contiguous block of at
+    /// least one member, the blocks of shards 1..N in order covering `0..total`. Errors
+    /// when `scene` has no `[ensemble]` or has fewer members than shards (then for every
+    /// K alike, so that a set of shards either all run or none does).
     pub fn members(&self, scene: &Scene) -> Result<Range<usize>, Error> {
         let field = "--shard";
         let given = format!("{}/{}", self.index, self.count);
@@ -68,12 +77,15 @@ impl Shard {
             ));
         };
         let (k, n) = (self.index, self.count);
-        let range = (k - 1) * total / n..k * total / n;
-        if range.is_empty() {
-            let reason = format!("the ensemble has {total} members: shards would be empty");
+        if n > total {
+            let reason = format!(
+                "{n} shards but the ensemble has {total} members: give at most {total} shards (each runs at least one member)"
+            );
             return Err(Error::field(field, given, reason));
         }
-        Ok(range)
+        // With n ≤ total every block holds at least one member. In u128: no overflow.
+        let bound = |j: usize| (j as u128 * total as u128 / n as u128) as usize;
+        Ok(bound(k - 1)..bound(k))
     }
 
     /// The record of this shard of `scene` with `members`.
@@ -117,6 +129,7 @@ pub fn merge(shards: &[Value]) -> Result<Value, Error> {
         ));
     };
     let (count, scene) = (first.count, first.scene.clone());
+    same_kernels(shards, &infos)?;
     let mut next = 0;
     for (k, (info, i)) in infos.iter().enumerate() {
         if info.count != count || info.scene != scene {
@@ -164,6 +177,38 @@ fn combine(ordered: &[&Value]) -> Result<Value, Error> {
         }
     }
     Ok(merged)
+}
+
+/// Refuses shards computed under different kernel sets (or recording none), naming
+/// both sets; `infos` are the shards' records with their file positions, shard 1 first.
+fn same_kernels(shards: &[Value], infos: &[(ShardInfo, usize)]) -> Result<(), Error> {
+    let kernels = |i: usize| shards[i].get("kernels").and_then(Value::as_str);
+    let first = infos[0].1;
+    let Some(set) = kernels(first) else {
+        return Err(shard_error(
+            first,
+            "records no kernel set (`kernels`): written by an older splinerod",
+        ));
+    };
+    for &(_, i) in &infos[1..] {
+        match kernels(i) {
+            Some(other) if other == set => {}
+            Some(other) => {
+                let reason = format!(
+                    "shards computed under different kernel sets: file {} \"{set}\", file {} \"{other}\"; their results differ at round-off: run every shard under one set ({})",
+                    first + 1,
+                    i + 1,
+                    splinerod_core::kernels::ENV
+                );
+                return Err(Error::field("merge", format!("file {}", i + 1), reason));
+            }
+            None => {
+                let reason = "records no kernel set (`kernels`): written by an older splinerod";
+                return Err(shard_error(i, reason));
+            }
+        }
+    }
+    Ok(())
 }
 
 fn shard_error(i: usize, reason: &str) -> Error {

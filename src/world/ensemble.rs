@@ -8,10 +8,12 @@
 //! Members that share a shape are solved [`LANES`] at a time by the batched implicit
 //! Euler step (see [`crate::world::lanes`]; [`Ensemble::batched`], on by default): each
 //! still takes its own step through every stage, with the same result up to round-off,
-//! and the grouping depends only on the members' order, so results stay bit-identical
-//! for any thread count.
+//! and a member's bits depend neither on the grouping nor on its lane-mates (a member
+//! alone is solved in the lanes too), so results stay bit-identical for any thread
+//! count and any split into shards (under one kernel set, [`splinerod_core::kernels`]).
 
 use crate::world::lanes::preload_group;
+use crate::world::unbatched::Unbatched;
 use crate::{Error, Simulation, StepReport};
 use splinerod_core::{Real, LANES};
 
@@ -62,35 +64,46 @@ impl Ensemble {
 
     /// Advances every member by `dt` (in parallel with the `parallel` feature). Members
     /// whose step fails keep their state; the error of the first failing member (by
-    /// index) is returned after all members have been tried.
+    /// index) is returned after all members have been tried. Each member's report says
+    /// why its step was solved alone, if it was ([`StepReport::unbatched`]).
     pub fn step(&mut self, dt: Real) -> Result<(), Error> {
         let batched = self.batched;
-        let prepare = move |group: &mut [Simulation]| {
+        let prepare = move |group: &mut [Simulation], alone: &mut [Option<Unbatched>]| {
             if batched {
-                preload_group(group, dt);
+                preload_group(group, dt, alone);
+            } else {
+                alone.fill(Some(Unbatched::Off));
             }
         };
-        self.each(prepare, |sim| sim.step(dt))
+        self.each(prepare, |sim| sim.step(dt), true)
     }
 
     /// Every member's [`Simulation::settle`] (the static solve), as [`Ensemble::step`].
     pub fn settle(&mut self) -> Result<(), Error> {
-        self.each(|_: &mut [Simulation]| {}, Simulation::settle)
+        let prepare = |_: &mut [Simulation], _: &mut [Option<Unbatched>]| {};
+        self.each(prepare, Simulation::settle, false)
     }
 
     /// Runs `prepare` on every group of [`LANES`] consecutive members, then `stage` on
-    /// each of its members, recording the reports.
+    /// each of its members, recording the reports (and, for a time step (`timed`), why
+    /// each member's step was solved alone).
     fn each(
         &mut self,
-        prepare: impl Fn(&mut [Simulation]) + Sync,
+        prepare: impl Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
         stage: impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
+        timed: bool,
     ) -> Result<(), Error> {
         self.reports
             .resize(self.members.len(), StepReport::default());
-        // One member (a single run): no thread pool round trip (tens of µs a step), and
-        // nothing to batch.
+        let steps = Stages {
+            prepare: &prepare,
+            stage: &stage,
+            timed,
+        };
         let failed = match (self.members.as_mut_slice(), self.reports.as_mut_slice()) {
-            ([sim], [report]) => stage_one(0, sim, report, &stage),
+            // One member (a single run, or a shard of one): no thread pool round trip
+            // (tens of µs a step); batched all the same, its lanes repeated.
+            (members @ [_], reports) => steps.group(0, members, reports),
             (members, reports) => {
                 // The first group ends at the next multiple of LANES (in the whole
                 // ensemble's numbering): the grouping of a shard is the whole run's.
@@ -98,8 +111,8 @@ impl Ensemble {
                 let head = head.min(members.len());
                 let (first, rest) = members.split_at_mut(head);
                 let (first_reports, rest_reports) = reports.split_at_mut(head);
-                let failed = stage_group(0, first, first_reports, &prepare, &stage);
-                let later = stage_all(head, rest, rest_reports, &prepare, &stage);
+                let failed = steps.group(0, first, first_reports);
+                let later = stage_all(head, rest, rest_reports, &steps);
                 failed.or(later)
             }
         };
@@ -110,6 +123,46 @@ impl Ensemble {
             }),
             None => Ok(()),
         }
+    }
+}
+
+/// What [`Ensemble::each`] runs on each group: `prepare`, then `stage` on every member.
+struct Stages<'a, P, S> {
+    prepare: &'a P,
+    stage: &'a S,
+    timed: bool,
+}
+
+impl<P, S> Stages<'_, P, S>
+where
+    P: Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
+    S: Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
+{
+    /// The stages of the group of members (at most [`LANES`]) starting at `first`; the
+    /// error of its first failing member.
+    fn group(
+        &self,
+        first: usize,
+        members: &mut [Simulation],
+        reports: &mut [StepReport],
+    ) -> Option<(usize, Error)> {
+        let mut alone = [None; LANES];
+        let alone = &mut alone[..members.len().min(LANES)];
+        (self.prepare)(&mut members[..alone.len()], alone);
+        let mut failed = None;
+        for (j, (sim, report)) in members.iter_mut().zip(reports).enumerate() {
+            if let Some(e) = stage_one(first + j, sim, report, self.stage) {
+                failed.get_or_insert(e);
+                continue;
+            }
+            if self.timed {
+                // A member prepared but not batched: its step was not the one solved.
+                let why = alone.get(j).copied().flatten();
+                let taken = report.solver.batched > 0;
+                report.unbatched = (!taken).then_some(why.unwrap_or(Unbatched::NotTaken));
+            }
+        }
+        failed
     }
 }
 
@@ -129,60 +182,45 @@ fn stage_one(
     }
 }
 
-/// [`Ensemble::each`]'s stages of the group of members starting at `first`; the error
-/// of its first failing member.
-fn stage_group(
-    first: usize,
-    members: &mut [Simulation],
-    reports: &mut [StepReport],
-    prepare: &(impl Fn(&mut [Simulation]) + Sync),
-    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
-) -> Option<(usize, Error)> {
-    prepare(members);
-    let mut failed = None;
-    for (j, (sim, report)) in members.iter_mut().zip(reports).enumerate() {
-        if let Some(e) = stage_one(first + j, sim, report, stage) {
-            failed.get_or_insert(e);
-        }
-    }
-    failed
-}
-
-/// [`stage_group`] on every group of [`LANES`] members, the first being member
+/// [`Stages::group`] on every group of [`LANES`] members, the first being member
 /// `offset`; the error of the first failing member.
 #[cfg(feature = "parallel")]
-fn stage_all(
+fn stage_all<P, S>(
     offset: usize,
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    prepare: &(impl Fn(&mut [Simulation]) + Sync),
-    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
-) -> Option<(usize, Error)> {
+    steps: &Stages<'_, P, S>,
+) -> Option<(usize, Error)>
+where
+    P: Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
+    S: Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
+{
     use rayon::prelude::*;
     members
         .par_chunks_mut(LANES)
         .zip(reports.par_chunks_mut(LANES))
         .enumerate()
-        .filter_map(|(g, (sims, reports))| {
-            stage_group(offset + g * LANES, sims, reports, prepare, stage)
-        })
+        .filter_map(|(g, (sims, reports))| steps.group(offset + g * LANES, sims, reports))
         .min_by_key(|(i, _)| *i)
 }
 
-/// [`stage_group`] on every group of [`LANES`] members, the first being member
+/// [`Stages::group`] on every group of [`LANES`] members, the first being member
 /// `offset`; the error of the first failing member.
 #[cfg(not(feature = "parallel"))]
-fn stage_all(
+fn stage_all<P, S>(
     offset: usize,
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    prepare: &(impl Fn(&mut [Simulation]) + Sync),
-    stage: &(impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync),
-) -> Option<(usize, Error)> {
+    steps: &Stages<'_, P, S>,
+) -> Option<(usize, Error)>
+where
+    P: Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
+    S: Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
+{
     let groups = members.chunks_mut(LANES).zip(reports.chunks_mut(LANES));
     let mut first = None;
     for (g, (sims, reports)) in groups.enumerate() {
-        if let Some(e) = stage_group(offset + g * LANES, sims, reports, prepare, stage) {
+        if let Some(e) = steps.group(offset + g * LANES, sims, reports) {
             first.get_or_insert(e);
         }
     }

@@ -14,16 +14,31 @@
 //! time (so the grouping, and with it every result, is the same for any thread count).
 //! Within such a group the lanes are the members that can be batched and have the
 //! shape of the first of them (the same knots and pins); a lane left over repeats the
-//! first member and its result is dropped. A member can be batched when its integrator
-//! has a batched form ([`Integrator::lane_params`], implicit Euler), its step is taken
-//! whole (no shorter sub-step pending), it does not adapt its knots (whose decisions a
-//! round-off difference could flip), it has no driven pins and no time-dependent
-//! energy, and every energy acting on it has a lane form
-//! ([`splinerod_energies::Energy::lane_term`]: gravity, the lumped mixed stretching and
-//! bending); anything else (contact, grabs, loads, clamps, twist) is stepped alone. A
-//! batched solve that meets what it does not replicate (see the solver's docs) is
-//! dropped whole and its members are stepped alone too.
+//! first member and its result is dropped, so a group of one member, or a member of a
+//! shape of its own, is solved in the lanes too. Whether a member can be batched is
+//! decided by [`decide`] from the member alone, which returns the reason
+//! ([`Unbatched`]) when it cannot: its integrator has a batched form
+//! ([`Integrator::lane_params`], implicit Euler), its step is taken whole (no shorter
+//! sub-step pending), it does not adapt its knots (whose decisions a round-off
+//! difference could flip), it has no driven pins and no time-dependent energy, and
+//! every energy acting on it has a lane form ([`splinerod_energies::Energy::lane_term`]:
+//! gravity, the lumped mixed stretching and bending); anything else (contact, grabs,
+//! loads, clamps, twist) is stepped alone. A batched solve that meets what it does not
+//! replicate (see the solver's docs) hands the lane's member back to step alone, with
+//! the lane's reason.
+//!
+//! **Independent of the lane-mates.** Every operation of the batched solve is lane by
+//! lane (the potential reports per lane whether it could evaluate it, the solver fails
+//! lanes one by one), the lanes of one solve share their shape, settings and forms, and
+//! the members' own decisions come first; so a member computes the same bits whichever
+//! members share its group — also alone, with its lanes repeated. (Bending's lanes read
+//! the first lane's quadrature table: the same bits as every lane's, since the lanes'
+//! knots are equal bit for bit and an ensemble's members reach them by the same
+//! operations.) That is what makes
+//! a shard of an ensemble (`--shard K/N`) compute its members exactly as a run of the
+//! whole ensemble, for any shard size.
 
+use crate::world::unbatched::Unbatched;
 use crate::Simulation;
 use splinerod_core::{Derivatives, Lanes, Real, LANES};
 use splinerod_energies::lanes::add_lanes;
@@ -51,27 +66,51 @@ impl LanePotential for Terms<'_> {
         q: &[Lanes],
         energy: &mut Lanes,
         mut derivatives: Option<Derivatives<'_>>,
-    ) -> bool {
-        self.terms.iter().flatten().all(|terms| {
+    ) -> [bool; LANES] {
+        let mut evaluated = [true; LANES];
+        for terms in self.terms.iter().flatten() {
             let d = derivatives.as_mut().map(Derivatives::reborrow);
-            add_lanes(terms, q, energy, d)
-        })
+            let lanes = add_lanes(terms, q, energy, d);
+            for (e, ok) in evaluated.iter_mut().zip(lanes) {
+                *e &= ok;
+            }
+        }
+        evaluated
     }
 }
 
-impl Simulation {
-    /// The Newton settings of this member's batched step of `dt`, if it can take one
-    /// (see the module docs; the energies are checked when the lanes are formed).
-    fn lane_params(&self, dt: Real) -> Option<NewtonParams> {
-        let params = self.integrator.lane_params()?;
-        let whole = self.substep.memory().next.is_none_or(|h| h >= dt);
-        let system = &self.system;
-        let driven = system.energies.iter().any(|e| e.time_dependent());
-        // An adaptive member's knots follow decisions a round-off difference could
-        // flip: stepped alone, it keeps exactly its own results.
-        let fixed = self.adapter.is_none();
-        (whole && fixed && !driven && system.drivers.is_empty()).then_some(params)
+/// The batching decision of one member for its step of `dt`, before any lanes are
+/// formed: the Newton settings of its batched step, or why it steps alone. Only the
+/// member's own state decides (see the module docs); the step's own `begin_step` is
+/// idempotent (`Energy::lane_term`'s contract), so calling it here changes nothing.
+/// The solve can still hand a member back ([`Unbatched::Solver`], [`Unbatched::Terms`]
+/// and the lane failures, from [`solve_lanes`]).
+pub(crate) fn decide(sim: &mut Simulation, dt: Real) -> Result<NewtonParams, Unbatched> {
+    let params = sim.integrator.lane_params().ok_or(Unbatched::Scheme)?;
+    if !sim.substep.memory().next.is_none_or(|h| h >= dt) {
+        return Err(Unbatched::SubStep);
     }
+    // An adaptive member's knots follow decisions a round-off difference could flip:
+    // stepped alone, it keeps exactly its own results.
+    if sim.adapter.is_some() {
+        return Err(Unbatched::Adaptive);
+    }
+    let system = &sim.system;
+    if !system.drivers.is_empty() || system.energies.iter().any(|e| e.time_dependent()) {
+        return Err(Unbatched::Driven);
+    }
+    if sim.system.begin_step(dt).is_err() {
+        return Err(Unbatched::Setup);
+    }
+    let rod = &sim.system.rod;
+    if let Some(e) = sim.system.acting().find(|e| e.lane_term(rod).is_none()) {
+        return Err(if e.name() == "stretch" {
+            Unbatched::StretchingForm
+        } else {
+            Unbatched::Energy
+        });
+    }
+    Ok(params)
 }
 
 /// Whether two members have one shape for the batched step: the same knots, pins at
@@ -93,12 +132,6 @@ fn same_shape(a: &Simulation, b: &Simulation) -> bool {
         && same_forms(a, b)
 }
 
-/// Whether every energy acting on the member has a lane form now.
-fn has_lane_form(sim: &Simulation) -> bool {
-    let rod = &sim.system.rod;
-    sim.system.acting().all(|e| e.lane_term(rod).is_some())
-}
-
 /// Whether the energies acting on both members have the same lane forms, in order.
 fn same_forms(a: &Simulation, b: &Simulation) -> bool {
     let (ra, rb) = (&a.system.rod, &b.system.rod);
@@ -112,21 +145,27 @@ fn same_forms(a: &Simulation, b: &Simulation) -> bool {
 }
 
 /// Solves the step of `dt` of the members of `group` (at most [`LANES`], consecutive)
-/// that can be batched, [`LANES`] of one shape at a time, and preloads each one's
-/// integrator with its result. A member's result does not depend on the others in its
-/// group: lanes never mix, a lane that fails leaves only its own member to step alone,
-/// and lanes left over repeat a member. Members left out are untouched: their own step
+/// that can be batched ([`decide`]), [`LANES`] of one shape at a time, and preloads each
+/// one's integrator with its result; `alone[i]` is set to why member `i` steps alone,
+/// `None` for a member preloaded. A member's result does not depend on the others in
+/// its group: lanes never mix, a lane that fails leaves only its own member to step
+/// alone, and lanes left over repeat a member (so a member with no lane-mates, a group
+/// of one, is solved in the lanes too). Members left out are untouched: their own step
 /// solves as usual.
-pub(crate) fn preload_group(group: &mut [Simulation], dt: Real) {
-    if !(dt.is_finite() && dt > 0.0) || group.len() > LANES {
+pub(crate) fn preload_group(group: &mut [Simulation], dt: Real, alone: &mut [Option<Unbatched>]) {
+    let mut params = [None; LANES];
+    if !(dt.is_finite() && dt > 0.0) || group.len() > LANES || alone.len() != group.len() {
+        alone.fill(Some(Unbatched::Solver));
         return;
     }
-    let mut params = [None; LANES];
-    for (p, sim) in params.iter_mut().zip(group.iter_mut()) {
-        *p = sim.lane_params(dt);
-        // The step's own begin_step is idempotent (Energy::lane_term's contract).
-        if p.is_some() && (sim.system.begin_step(dt).is_err() || !has_lane_form(sim)) {
-            *p = None;
+    for ((p, sim), why) in params
+        .iter_mut()
+        .zip(group.iter_mut())
+        .zip(alone.iter_mut())
+    {
+        match decide(sim, dt) {
+            Ok(settings) => (*p, *why) = (Some(settings), None),
+            Err(reason) => *why = Some(reason),
         }
     }
     while let Some(lead) = (0..group.len()).find(|&i| params[i].is_some()) {
@@ -146,22 +185,26 @@ pub(crate) fn preload_group(group: &mut [Simulation], dt: Real) {
             params[i] = None;
         }
         if let Some(settings) = settings {
-            solve_lanes(group, lanes, count, &settings, dt);
+            solve_lanes(group, (lanes, count), &settings, dt, alone);
         }
     }
 }
 
-/// The batched solve of the members `lanes` (the first `count` distinct, the rest
-/// repeats) of `group`, preloading each member whose lane succeeded.
+/// The batched solve of the members `lanes.0` (the first `lanes.1` distinct, the rest
+/// repeats of the first) of `group`, preloading each member whose lane succeeded and
+/// setting `alone` for those whose lane did not.
 fn solve_lanes(
     group: &mut [Simulation],
-    lanes: [usize; LANES],
-    count: usize,
+    (lanes, count): ([usize; LANES], usize),
     params: &NewtonParams,
     dt: Real,
+    alone: &mut [Option<Unbatched>],
 ) {
     let members: [&Simulation; LANES] = std::array::from_fn(|l| &group[lanes[l]]);
     let Some(potential) = lane_terms(members) else {
+        lanes[..count]
+            .iter()
+            .for_each(|&i| alone[i] = Some(Unbatched::Terms));
         return;
     };
     let rods = members.map(|m| &m.system.rod);
@@ -172,13 +215,20 @@ fn solve_lanes(
         solver.step(rods, pins, &potential, bandwidth, params, dt)
     });
     if solved.is_err() {
+        lanes[..count]
+            .iter()
+            .for_each(|&i| alone[i] = Some(Unbatched::Solver));
         return;
     }
     SOLVER.with(|solver| {
         let solver = solver.borrow();
         for (l, &i) in lanes.iter().enumerate().take(count) {
-            let Ok(outcome) = solver.outcome(l) else {
-                continue;
+            let outcome = match solver.outcome(l) {
+                Ok(outcome) => outcome,
+                Err(why) => {
+                    alone[i] = Some(Unbatched::of_lane(why.0));
+                    continue;
+                }
             };
             let sim = &mut group[i];
             let rod = &sim.system.rod;

@@ -17,3 +17,4 @@ pub(crate) mod simulation;
 pub mod step_report;
 pub mod substep;
 pub(crate) mod system;
+pub mod unbatched;

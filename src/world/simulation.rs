@@ -222,6 +222,7 @@ impl Simulation {
             substeps,
             energies: self.system.summary()?,
             error_estimate,
+            unbatched: None,
         })
     }
 

@@ -15,6 +15,7 @@ use splinerod_integrators::StepStats;
 use std::ops::AddAssign;
 
 use crate::world::substep::SubstepCounts;
+use crate::world::unbatched::Unbatched;
 
 /// Wall time of each stage of a step, s.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
@@ -79,4 +80,8 @@ pub struct StepReport {
     pub energies: EnergySummary,
     /// The error estimate made at this step, m (`None` when none was due).
     pub error_estimate: Option<Real>,
+    /// For a member of an [`crate::Ensemble`]: why its step was solved alone instead of
+    /// in the lanes of the batched step (`None` for a batched step, a static solve or a
+    /// simulation stepped on its own).
+    pub unbatched: Option<Unbatched>,
 }

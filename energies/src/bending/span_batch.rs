@@ -116,9 +116,10 @@ impl SpanBatch {
 
 /// Adds the terms of the points `terms` of one span (basis derivatives `d1[p]`,
 /// `d2[p]` of the functions `first ..` `first + order`): to each gradient entry and
-/// each upper band block, loaded and stored once. Where the processor has AVX the
-/// same operations run four entries per instruction instead of two (the same IEEE
-/// operations, so the same bits).
+/// each upper band block, loaded and stored once. Under the wide kernel set
+/// ([`splinerod_core::lanes::wide`]) the same operations run four entries per
+/// instruction (AVX) instead of two (the same IEEE operations, so the same bits in
+/// either set).
 fn add_terms<D: AsRef<[Real]>>(
     sums: &mut Sums<'_>,
     shape: (usize, usize),
@@ -126,8 +127,8 @@ fn add_terms<D: AsRef<[Real]>>(
     terms: &[PointTerms],
 ) {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") {
-        // SAFETY: the processor has AVX (checked on the line above).
+    if splinerod_core::lanes::wide() {
+        // SAFETY: the wide set runs only where the processor has AVX2 (so AVX).
         return unsafe { add_terms_avx(sums, shape, derivatives, terms) };
     }
     add_terms_plain(sums, shape, derivatives, terms);

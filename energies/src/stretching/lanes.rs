@@ -22,9 +22,8 @@ pub struct MomentTerm<'a> {
     stiffness: Real,
     /// \\(\hat\lambda_j\\) by function index (empty: none).
     multipliers: &'a [Real],
-    /// The rod's quadrature, for the projection guard's test ([`guard_is_idle`]);
-    /// `None`: the rod has no guard (not asked for, or inextensible). The lanes' rods share their knots,
-    /// so lane 0's serves all.
+    /// The rod's quadrature, for the projection guard's test ([`guard_idle`], each lane
+    /// on its own rod's); `None`: the rod has no guard (not asked for, or inextensible).
     quadrature: Option<&'a QuadratureTable>,
 }
 
@@ -49,7 +48,7 @@ impl MomentTerm<'_> {
 impl Stretching {
     /// The lane term of this energy on `rod`: the lumped mixed form on an open rod whose
     /// table is current (after [`crate::Energy::begin_step`]); `None` otherwise.
-    /// A rod with a rest curve has none: the guard's test ([`guard_is_idle`]) assumes
+    /// A rod with a rest curve has none: the guard's test ([`guard_idle`]) assumes
     /// unit rest speed.
     pub(super) fn moment_term<'a>(&'a self, rod: &'a Rod) -> Option<LaneTerm<'a>> {
         let lumped = self.formulation == super::StretchFormulation::Mixed;
@@ -66,39 +65,43 @@ impl Stretching {
     }
 }
 
-/// [`crate::lanes::add_lanes`] for the moment terms `terms` (checked compatible);
-/// false, adding nothing, where a lane's projection guard would act
-/// ([`guard_is_idle`]): the lanes do not replicate it.
+/// [`crate::lanes::add_lanes`] for the moment terms `terms` (checked compatible); per
+/// lane, false where the lane's projection guard would act ([`guard_idle`]): the lanes
+/// do not replicate it (that member's step is taken alone). Nothing is added when no
+/// lane is idle.
 pub(crate) fn add_moment_lanes(
     terms: [&MomentTerm<'_>; LANES],
     q: &LaneField,
     energy: &mut Lanes,
     derivatives: Option<Derivatives<'_>>,
-) -> bool {
-    if !guard_is_idle(terms[0], q) {
-        return false;
+) -> [bool; LANES] {
+    let idle = guard_idle(terms, q);
+    if !idle.contains(&true) {
+        return idle;
     }
     #[cfg(target_arch = "x86_64")]
     if splinerod_core::lanes::wide() {
         // SAFETY: the processor has AVX2 and FMA (checked on the line above).
         unsafe { moments_wide(terms, q, energy, derivatives) };
-        return true;
+        return idle;
     }
     moments::<false>(terms, q, energy, derivatives);
-    true
+    idle
 }
 
-/// Whether the guard ([`super::guard`]) is idle on every lane's rod: on each knot span,
-/// every quadrature point's strain within [`super::GUARD_DEVIATION`] of the span's
-/// weighted mean, each lane's \\(C'\\) from the shared table (a dozen multiply-adds per
-/// point and lane). Where it is not, the lanes' potential reports that it cannot
-/// replicate the members (their step is taken alone).
-fn guard_is_idle(term: &MomentTerm<'_>, q: &LaneField) -> bool {
-    let Some(table) = term.quadrature else {
-        return true;
-    };
+/// Per lane, whether the guard ([`super::guard`]) is idle on the lane's rod: no guard,
+/// or on each knot span every quadrature point's strain within
+/// [`super::GUARD_DEVIATION`] of the span's weighted mean, \(C'\) from the lane's own
+/// table (a dozen multiply-adds per point). Each lane is tested alone, so a lane's
+/// answer does not depend on the others.
+fn guard_idle(terms: [&MomentTerm<'_>; LANES], q: &LaneField) -> [bool; LANES] {
+    std::array::from_fn(|l| terms[l].quadrature.is_none_or(|t| lane_guard_idle(t, q, l)))
+}
+
+/// [`guard_idle`] for lane `l` on the quadrature table `table`.
+fn lane_guard_idle(table: &QuadratureTable, q: &LaneField, l: usize) -> bool {
     let mut points = table.walk().peekable();
-    let mut strains = [[0.0; LANES]; MAX_SPAN_POINTS];
+    let mut strains = [0.0; MAX_SPAN_POINTS];
     let mut weights = [0.0; MAX_SPAN_POINTS];
     while let Some(head) = points.peek() {
         let first = head.first;
@@ -107,28 +110,23 @@ fn guard_is_idle(term: &MomentTerm<'_>, q: &LaneField) -> bool {
             if count == MAX_SPAN_POINTS {
                 return false;
             }
-            let mut c1 = [ZERO; 3];
+            let mut c1 = [0.0; 3];
             for (a, &w) in qp.d1.iter().enumerate() {
                 for (c, sum) in c1.iter_mut().enumerate() {
-                    let x = &q[3 * (qp.first + a) + c];
-                    (0..LANES).for_each(|l| sum[l] += w * x[l]);
+                    *sum += w * q[3 * (qp.first + a) + c][l];
                 }
             }
-            strains[count] = std::array::from_fn(|l| {
-                0.5 * (c1[0][l] * c1[0][l] + c1[1][l] * c1[1][l] + c1[2][l] * c1[2][l] - 1.0)
-            });
+            strains[count] = 0.5 * (c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2] - 1.0);
             weights[count] = qp.weight;
             count += 1;
         }
         let total: Real = weights[..count].iter().sum();
-        for l in 0..LANES {
-            let mean = (0..count).map(|p| weights[p] * strains[p][l]).sum::<Real>() / total;
-            if strains[..count]
-                .iter()
-                .any(|e| (e[l] - mean).abs() > super::GUARD_DEVIATION)
-            {
-                return false;
-            }
+        let mean = (0..count).map(|p| weights[p] * strains[p]).sum::<Real>() / total;
+        if strains[..count]
+            .iter()
+            .any(|e| (e - mean).abs() > super::GUARD_DEVIATION)
+        {
+            return false;
         }
     }
     true

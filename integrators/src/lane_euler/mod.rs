@@ -24,8 +24,11 @@
 //! of failed lanes one by one, so a failure changes no result; each lane's result
 //! equals the scalar solver's up to round-off.
 
+mod fingerprint;
 mod mass;
 mod pins;
+
+pub use fingerprint::fingerprint;
 
 use crate::batched::BatchedBandedCholesky;
 use crate::linear::LinearSolverKind;
@@ -40,9 +43,15 @@ use splinerod_core::{Derivatives, LaneBand, Lanes, Pin, Real, Rod, LANES};
 pub trait LanePotential {
     /// Adds to `energy` each lane's potential energy at positions `q` (coordinate `c` of
     /// point `i` at `3i + c`) and, with `derivatives`, its gradient and its exact Hessian
-    /// (upper band) times the scale given there. False if it cannot (every lane then
-    /// fails).
-    fn add(&self, q: &[Lanes], energy: &mut Lanes, derivatives: Option<Derivatives<'_>>) -> bool;
+    /// (upper band) times the scale given there. Per lane, whether it could (a lane it
+    /// could not evaluate fails, alone: the answer for one lane must not depend on the
+    /// others).
+    fn add(
+        &self,
+        q: &[Lanes],
+        energy: &mut Lanes,
+        derivatives: Option<Derivatives<'_>>,
+    ) -> [bool; LANES];
 }
 
 /// Why a batched step was not taken: the rods must be stepped one by one.
@@ -351,8 +360,9 @@ impl LaneEuler {
             hessian: &mut self.a,
             hessian_scale: dt * dt,
         };
-        if !potential.add(&self.q, &mut energy, Some(derivatives)) {
-            (0..LANES).for_each(|l| self.fail(l, "potential"));
+        let evaluated = potential.add(&self.q, &mut energy, Some(derivatives));
+        for l in (0..LANES).filter(|&l| !evaluated[l]) {
+            self.fail(l, "potential");
         }
         let scale: Lanes = std::array::from_fn(|l| 1.0 + dt * self.alpha[l]);
         for ((t, x), v0) in self.trial.iter_mut().zip(&self.x).zip(&self.v0) {
@@ -422,8 +432,9 @@ impl LaneEuler {
             *q = std::array::from_fn(|l| q0[l] + x[l] * dt);
         }
         let mut trial_energy = ZERO;
-        if !potential.add(&self.q, &mut trial_energy, None) {
-            trial_energy = [Real::NAN; LANES];
+        let evaluated = potential.add(&self.q, &mut trial_energy, None);
+        for l in (0..LANES).filter(|&l| !evaluated[l]) {
+            trial_energy[l] = Real::NAN;
         }
         let phi = self.merit(trial_energy, dt);
         for l in (0..LANES).filter(|&l| search[l]) {
@@ -475,28 +486,4 @@ impl LaneEuler {
             forces.extend(mu.map(|m| Vector3::new(m[0][l], m[1][l], m[2][l]) / dt));
         }
     }
-}
-
-/// A 64-bit fingerprint of a state (every bit of every coordinate, FNV-1a style):
-/// what a preloaded step ([`crate::Integrator::preload`]) recognises its start by,
-/// without a copy of it to write. Each coordinate feeds its own chain (x, y, z of the
-/// positions, then of the velocities), so that the chains' multiplications overlap;
-/// they are folded together with the lengths at the end.
-pub fn fingerprint(positions: &[Vector3<Real>], velocities: &[Vector3<Real>]) -> u64 {
-    const PRIME: u64 = 0x0000_0100_0000_01b3;
-    let mut chains = [0xcbf2_9ce4_8422_2325_u64; 6];
-    for (field, chains) in [positions, velocities]
-        .iter()
-        .zip(chains.chunks_exact_mut(3))
-    {
-        for p in field.iter() {
-            for (h, x) in chains.iter_mut().zip(p.iter()) {
-                *h = (*h ^ x.to_bits()).wrapping_mul(PRIME);
-            }
-        }
-    }
-    let lengths = (positions.len() as u64) << 32 | velocities.len() as u64;
-    chains
-        .iter()
-        .fold(lengths, |h, &c| (h ^ c).wrapping_mul(PRIME))
 }
