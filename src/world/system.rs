@@ -34,7 +34,7 @@ pub struct PinDriver {
     pub path: Path,
 }
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
+use splinerod_core::{BlockBanded, Cancel, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
 use splinerod_energies::{Energy, EnergySummary, PointForce};
 use splinerod_integrators::System;
 
@@ -58,6 +58,9 @@ pub struct RodSystem {
     heard_epoch: u64,
     /// Every knot change so far, in order (checkpoints replay them).
     pub(crate) knot_changes: Vec<crate::world::saved::KnotChange>,
+    /// A stop asked from outside (a signal): the solvers poll it
+    /// ([`System::interrupted`]) and abandon the step under way. Default: none.
+    pub cancel: Cancel,
 }
 
 impl RodSystem {
@@ -73,6 +76,7 @@ impl RodSystem {
             time: 0.0,
             drivers: Vec::new(),
             loads: Vec::new(),
+            cancel: Cancel::none(),
         }
     }
 
@@ -355,6 +359,9 @@ impl System for RodSystem {
     }
     fn update_multipliers(&mut self, stiffen: bool) -> Real {
         RodSystem::update_multipliers(self, stiffen)
+    }
+    fn interrupted(&self) -> bool {
+        self.cancel.abandon()
     }
     fn set_stiffness_scale(&mut self, scale: Real) -> bool {
         let mut any = false;
