@@ -19,10 +19,12 @@
 //! Both polls are one relaxed atomic load while no stop is asked (plus a countdown with
 //! a hook); only after a request does [`Cancel::abandon`] read the clock.
 //!
-//! A hook ([`Cancel::with_hook`]) lets the polling thread raise the request itself — an
-//! interpreter that learns of signals only when asked (Python's
-//! `PyErr_CheckSignals`). It is called from inside [`Cancel::requested`] on every
-//! [`HOOK_POLLS`]-th poll, at most once per [`HOOK_INTERVAL`].
+//! A hook ([`Cancel::with_hook`]) lets a thread raise the request itself — an
+//! interpreter that learns of signals only when asked (Python's `PyErr_CheckSignals`,
+//! which only its main thread may call). It runs only on the thread that attached it,
+//! from inside [`Cancel::requested`] on every [`HOOK_POLLS`]-th poll there, or from
+//! [`Cancel::check`] on every call, at most once per [`HOOK_INTERVAL`]. (Polls on other
+//! threads — an ensemble's workers — see the request once the hook has raised it.)
 //!
 //! ```
 //! use splinerod_core::Cancel;
@@ -37,7 +39,13 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering::Relaxed};
 use std::sync::Arc;
+use std::thread::ThreadId;
 use std::time::{Duration, Instant};
+
+thread_local! {
+    /// The polling thread (read without touching its `Thread` handle).
+    static THREAD: ThreadId = std::thread::current().id();
+}
 
 /// A hook is considered on every this many polls of [`Cancel::requested`].
 pub const HOOK_POLLS: u32 = 8;
@@ -64,9 +72,11 @@ struct Shared {
     hook: Option<Hook>,
 }
 
-/// A check that may raise the request from the polling thread.
+/// A check that may raise the request from the thread that attached it.
 struct Hook {
     check: Box<dyn Fn() -> bool + Send + Sync>,
+    /// The thread it runs on.
+    thread: ThreadId,
     /// Polls left before the hook is considered again.
     countdown: AtomicU32,
     /// ns since `origin` of the last call.
@@ -118,10 +128,11 @@ impl Cancel {
     }
 
     /// This request, raised also when `check` returns true (module docs); `check` runs
-    /// on whichever thread polls, so it must itself decide whether it can act there.
+    /// only on the calling thread, when that thread polls.
     pub fn with_hook(self, check: impl Fn() -> bool + Send + Sync + 'static) -> Self {
         let hook = Hook {
             check: Box::new(check),
+            thread: THREAD.with(|t| *t),
             countdown: AtomicU32::new(1),
             last: AtomicU64::new(0),
         };
@@ -166,7 +177,16 @@ impl Cancel {
     pub fn requested(&self) -> bool {
         match &self.shared {
             None => false,
-            Some(s) => s.flag.load(Relaxed) || s.hook.as_ref().is_some_and(|h| s.call(h)),
+            Some(s) => s.flag.load(Relaxed) || s.hook.as_ref().is_some_and(|h| s.call(h, false)),
+        }
+    }
+
+    /// [`Cancel::requested`], considering the hook on every call (not every
+    /// [`HOOK_POLLS`]-th): for the polls between steps, which may be few.
+    pub fn check(&self) -> bool {
+        match &self.shared {
+            None => false,
+            Some(s) => s.flag.load(Relaxed) || s.hook.as_ref().is_some_and(|h| s.call(h, true)),
         }
     }
 
@@ -201,10 +221,13 @@ impl Shared {
         now.saturating_sub(first) >= self.grace
     }
 
-    /// Counts a poll down and, when due, calls the hook; raises the request if it says
-    /// so. Whether it did.
-    fn call(&self, hook: &Hook) -> bool {
-        if hook.countdown.fetch_sub(1, Relaxed) > 1 {
+    /// On the hook's thread, counts a poll down (unless `now`) and, when due, calls the
+    /// hook; raises the request if it says so. Whether it did.
+    fn call(&self, hook: &Hook, now: bool) -> bool {
+        if THREAD.with(|t| *t != hook.thread) {
+            return false;
+        }
+        if !now && hook.countdown.fetch_sub(1, Relaxed) > 1 {
             return false;
         }
         hook.countdown.store(HOOK_POLLS, Relaxed);
@@ -277,5 +300,17 @@ mod tests {
         }
         assert!(c.abandon());
         assert_eq!(calls.load(Relaxed), 2, "called at most once per interval");
+    }
+
+    #[test]
+    fn a_hook_runs_only_on_its_thread() {
+        let c = Cancel::new().with_hook(|| true);
+        let elsewhere = c.clone();
+        let seen = std::thread::spawn(move || (0..100).any(|_| elsewhere.check()));
+        assert!(
+            !seen.join().unwrap_or(true),
+            "not raised from another thread"
+        );
+        assert!(c.check(), "raised on its own");
     }
 }

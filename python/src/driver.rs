@@ -31,7 +31,7 @@ impl Driver {
             Self::Code { sim, dt, calls } => {
                 sim.system.cancel = cancel.clone();
                 for _ in 0..n {
-                    if cancel.requested() {
+                    if cancel.check() {
                         return Err(Error::Interrupted("between steps"));
                     }
                     match sim.integrator.solves_equilibrium() {

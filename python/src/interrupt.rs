@@ -3,11 +3,13 @@
 //! Python runs its signal handlers only when asked (`PyErr_CheckSignals`, on the main
 //! thread). A long call (`Simulation.step`, `run`, a scene's knot fit) hands the run a
 //! [`Cancel`] whose hook asks, from the calling thread, at most every 20 ms while the
-//! solvers poll ([`splinerod::core::cancel`]); a handler that raises (the default
-//! SIGINT handler raises `KeyboardInterrupt`) raises the request, the run stops between
-//! steps or abandons the step under way (after the CLI's grace,
+//! solvers poll there and between steps ([`splinerod::core::cancel`]); a handler that
+//! raises (the default SIGINT handler raises `KeyboardInterrupt`) raises the request,
+//! the run stops between steps or abandons the step under way (after the CLI's grace,
 //! [`splinerod::run::control::STOP_GRACE`]) and is put back as it stood after the last
-//! completed step, and the call raises the handler's exception.
+//! completed step, and the call raises the handler's exception. An ensemble's members
+//! are stepped on worker threads, where the hook cannot run: it then notices Ctrl-C
+//! between steps (within a step only once a poll on the calling thread has raised it).
 
 use crate::errors::to_py;
 use pyo3::exceptions::PyKeyboardInterrupt;
@@ -27,15 +29,11 @@ pub struct Interrupt {
 
 impl Interrupt {
     /// A request whose hook runs Python's signal handlers on the thread that makes it
-    /// (elsewhere — a worker thread of an ensemble — it does nothing).
+    /// (only there: [`Cancel::with_hook`]).
     pub fn new() -> Self {
         let caught = Arc::new(Mutex::new(None));
         let slot = caught.clone();
-        let caller = std::thread::current().id();
         let hook = move || {
-            if std::thread::current().id() != caller {
-                return false;
-            }
             Python::attach(|py| match py.check_signals() {
                 Ok(()) => false,
                 Err(e) => {

@@ -21,7 +21,7 @@ use splinerod::run::shard::Shard;
 use splinerod::{Error, Observer};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 #[derive(Parser)]
@@ -155,9 +155,8 @@ fn main() -> ExitCode {
     }
 }
 
-/// Prints `text` on standard output. A closed pipe (`splinerod run … | head -1`) drops
-/// it silently, as Unix tools do; any other failure is reported on standard error. The
-/// run goes on either way: its files are its results.
+/// Prints `text` on standard output; a closed pipe (`splinerod run … | head -1`) drops
+/// it silently, other failures are reported on standard error. The run goes on.
 fn say(text: std::fmt::Arguments<'_>) {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
@@ -340,7 +339,7 @@ fn run(args: RunArgs, line: Vec<String>) -> Result<ExitCode, Error> {
         path: args.scene.display().to_string(),
         source,
     })?;
-    let scene = match splinerod::Scene::load_cancellable(&args.scene, &signals.cancel) {
+    let scene = match splinerod::Scene::load_cancellable(&args.scene, &signals) {
         Err(e) if e.is_interrupted() => return Ok(stopped_without_state(&e)),
         loaded => loaded?,
     };
@@ -433,7 +432,7 @@ fn execute_run(
     go: impl FnOnce(&mut [&mut dyn Observer], &RunControl) -> Result<splinerod::RunResult, Error>,
     plan: Option<CheckpointPlan>,
     max_steps: Option<usize>,
-    signals: Signals,
+    signals: Cancel,
 ) -> Result<ExitCode, Error> {
     let mut boxed = observers(args)?;
     let mut refs: Vec<&mut dyn Observer> = Vec::with_capacity(boxed.len());
@@ -443,7 +442,7 @@ fn execute_run(
     let dir = plan.as_ref().map(|p| p.dir.display().to_string());
     let control = RunControl {
         max_steps,
-        cancel: signals.cancel.clone(),
+        cancel: signals.clone(),
         checkpoint: plan,
     };
     let result = match go(&mut refs, &control) {
@@ -454,13 +453,11 @@ fn execute_run(
     if let Some(path) = &args.json {
         write_json(path, &result)?;
     }
-    if !signals.flag.load(Ordering::SeqCst) {
+    if !signals.requested() {
         return Ok(ExitCode::SUCCESS);
     }
-    let how = match result.abandoned_step {
-        true => "abandoned the step under way (rolled back) and ",
-        false => "",
-    };
+    let abandoned = "abandoned the step under way (rolled back) and ";
+    let how = if result.abandoned_step { abandoned } else { "" };
     complain(format_args!(
         "interrupted: {how}stopped at t = {} s after {} steps\n",
         result.time, result.steps
@@ -479,19 +476,10 @@ fn stopped_without_state(e: &Error) -> ExitCode {
     ExitCode::from(INTERRUPTED)
 }
 
-/// The stop request SIGINT and SIGTERM raise.
-struct Signals {
-    /// Raised by the first signal.
-    flag: Arc<AtomicBool>,
-    /// The request the run polls: between steps at once, inside a step after
-    /// [`STOP_GRACE`].
-    cancel: Cancel,
-}
-
 /// SIGINT and SIGTERM raise the returned request: the run stops at the end of its step,
 /// or abandons a step still running [`STOP_GRACE`] later, and writes its outputs; a
 /// second signal ends the process at once with the interrupted code.
-fn stop_on_signals() -> Result<Signals, Error> {
+fn stop_on_signals() -> Result<Cancel, Error> {
     use signal_hook::consts::{SIGINT, SIGTERM};
     let flag = Arc::new(AtomicBool::new(false));
     for signal in [SIGINT, SIGTERM] {
@@ -506,6 +494,5 @@ fn stop_on_signals() -> Result<Signals, Error> {
             source,
         })?;
     }
-    let cancel = Cancel::from_flag(flag.clone()).with_grace(STOP_GRACE);
-    Ok(Signals { flag, cancel })
+    Ok(Cancel::from_flag(flag).with_grace(STOP_GRACE))
 }

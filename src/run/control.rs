@@ -57,7 +57,7 @@ pub struct RunControl {
 impl RunControl {
     /// Whether the run must stop before taking step `step` (0-based).
     pub fn stops_before(&self, step: usize) -> bool {
-        self.cancel.requested() || self.max_steps.is_some_and(|m| step >= m)
+        self.cancel.check() || self.max_steps.is_some_and(|m| step >= m)
     }
 }
 

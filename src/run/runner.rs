@@ -280,7 +280,7 @@ pub fn resume(
     control: &RunControl,
 ) -> Result<RunResult, Error> {
     let checkpoint = crate::run::checkpoint::read(dir)?;
-    let scene = Scene::from_toml(&checkpoint.scene)?;
+    let scene = Scene::from_toml_cancellable(&checkpoint.scene, &control.cancel)?;
     let (only, shard) = (checkpoint.only, checkpoint.shard);
     let mut result = crate::run::main_loop::resume_scene(&scene, checkpoint, observers, control)?;
     if let (Some((a, b)), Some((index, count))) = (only, shard) {

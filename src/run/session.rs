@@ -97,7 +97,7 @@ impl SceneRun {
     pub fn advance(&mut self, stages: usize) -> Result<(), Error> {
         let (statics, dt) = (self.is_static(), self.dt());
         for _ in 0..stages {
-            if self.cancel.requested() {
+            if self.cancel.check() {
                 return Err(Error::Interrupted("between steps"));
             }
             let start = Instant::now();
