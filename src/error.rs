@@ -111,6 +111,23 @@ pub enum Error {
         /// What went wrong.
         source: Box<Error>,
     },
+    /// A stop asked from outside (SIGINT, SIGTERM, a stop request, Python's
+    /// `KeyboardInterrupt`) ended the work before it had a state to report; says where.
+    /// (A solve abandoned inside a step is [`IntegratorError::Interrupted`]; see
+    /// [`Error::is_interrupted`].)
+    #[error("interrupted {0}")]
+    Interrupted(&'static str),
+    /// A step failed at the shortest sub-step allowed (`solver.min_dt`,
+    /// [`crate::substep::StepControl::min_dt`]): the sub-stepper never goes below it.
+    #[error("the step from t = {time} s cannot be completed with sub-steps of at least `solver.min_dt` = {min_dt:e} s: {reason}")]
+    MinDtReached {
+        /// Start of the step, s.
+        time: f64,
+        /// The shortest sub-step allowed, s.
+        min_dt: f64,
+        /// Why the shortest sub-step failed, and what to change.
+        reason: String,
+    },
     /// From the core (basis, knots, rod).
     #[error(transparent)]
     Core(#[from] CoreError),
@@ -152,7 +169,19 @@ impl Error {
             | Self::OutOfMemory { field, .. } => Some(field),
             Self::Parse { field, .. } => field.as_deref(),
             Self::Member { source, .. } => source.field_name(),
+            Self::MinDtReached { .. } => Some("solver.min_dt"),
             _ => None,
+        }
+    }
+
+    /// Whether this error is a stop asked from outside: [`Error::Interrupted`], or a
+    /// solve abandoned on request ([`IntegratorError::Interrupted`]), also an ensemble
+    /// member's.
+    pub fn is_interrupted(&self) -> bool {
+        match self {
+            Self::Interrupted(_) | Self::Integrator(IntegratorError::Interrupted) => true,
+            Self::Member { source, .. } => source.is_interrupted(),
+            _ => false,
         }
     }
 

@@ -15,6 +15,23 @@ pub const MAX_DEGREE: usize = 9;
 /// Largest number of basis functions non-zero at one parameter (`MAX_DEGREE + 1`).
 pub const MAX_ORDER: usize = MAX_DEGREE + 1;
 
+/// Most basis functions (control points) a space may have, 2^24: checked before its
+/// knots are allocated, so that an absurd count is an error, not an allocation failure.
+/// A rod this fine needs gigabytes; the scene limits stop far below it.
+pub const MAX_BASIS_FUNCTIONS: usize = 1 << 24;
+
+/// Error unless `count` basis functions are at most [`MAX_BASIS_FUNCTIONS`].
+pub(crate) fn check_count(count: usize) -> Result<(), CoreError> {
+    if count > MAX_BASIS_FUNCTIONS {
+        return Err(CoreError::InvalidParameter {
+            name: "control_points",
+            value: count as Real,
+            reason: "more than the 16777216 (2^24) basis functions a space may have",
+        });
+    }
+    Ok(())
+}
+
 /// Values and derivatives of the basis functions that are non-zero at one parameter.
 ///
 /// Function `first + k` has value `value[k]`, first derivative `d1[k]` and second

@@ -27,6 +27,7 @@ impl BSplineSpace {
     pub fn new(degree: usize, knots: Vec<Real>) -> Result<Self, CoreError> {
         check_degree(degree)?;
         let count = knots.len().saturating_sub(degree + 1);
+        crate::basis::check_count(count)?;
         if count < degree + 1 {
             return Err(CoreError::TooFewControlPoints { count, degree });
         }
@@ -263,7 +264,7 @@ pub(crate) fn derivatives<const P: usize>(
     }
 }
 
-fn check_degree(degree: usize) -> Result<(), CoreError> {
+pub(crate) fn check_degree(degree: usize) -> Result<(), CoreError> {
     if (1..=MAX_DEGREE).contains(&degree) {
         Ok(())
     } else {
@@ -276,6 +277,7 @@ fn check_degree(degree: usize) -> Result<(), CoreError> {
 
 fn check_layout(degree: usize, count: usize, length: Real) -> Result<(), CoreError> {
     check_degree(degree)?;
+    crate::basis::check_count(count)?;
     if count < degree + 1 {
         return Err(CoreError::TooFewControlPoints { count, degree });
     }

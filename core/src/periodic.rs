@@ -41,7 +41,9 @@ impl PeriodicBSplineSpace {
     /// least `degree + 1`.
     pub fn new(degree: usize, breaks: Vec<Real>, period: Real) -> Result<Self, CoreError> {
         crate::check::positive("period", period)?;
+        crate::bspline::check_degree(degree)?;
         let m = breaks.len();
+        crate::basis::check_count(m)?;
         if m < degree + 1 {
             return Err(CoreError::TooFewControlPoints { count: m, degree });
         }
@@ -84,6 +86,7 @@ impl PeriodicBSplineSpace {
     /// `count` distinct control points on evenly spaced breakpoints `k L / count`.
     pub fn uniform(degree: usize, count: usize, period: Real) -> Result<Self, CoreError> {
         crate::check::positive("period", period)?;
+        crate::basis::check_count(count)?;
         let breaks = (0..count)
             .map(|k| period * k as Real / count as Real)
             .collect();

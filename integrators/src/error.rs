@@ -72,6 +72,11 @@ pub enum IntegratorError {
         /// Limit.
         limit: usize,
     },
+    /// The solve was abandoned because a stop was asked from outside
+    /// ([`crate::System::interrupted`]: a signal, a stop request); the state is rolled
+    /// back as for any error. Not recoverable: nothing is retried.
+    #[error("interrupted: the solve was abandoned on request (a signal or a stop request); state rolled back")]
+    Interrupted,
     /// An error from the core (a pin outside the rod, ...).
     #[error(transparent)]
     Core(#[from] CoreError),

@@ -125,6 +125,14 @@ pub trait System: Send + Sync {
         let _ = stiffen;
         0.0
     }
+    /// Whether the solve under way must be abandoned (a stop was asked from outside,
+    /// e.g. by a signal: [`splinerod_core::Cancel::abandon`]). Newton's method polls it
+    /// once per iteration and then returns [`IntegratorError::Interrupted`], leaving the
+    /// rollback to its caller as for any error; it must be as cheap as an atomic load.
+    /// Default: never.
+    fn interrupted(&self) -> bool {
+        false
+    }
 }
 
 /// Counters of one step or solve, for statistics and regression snapshots.

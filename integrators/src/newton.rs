@@ -241,6 +241,9 @@ pub fn solve(
     let mut merit = None;
     problem.apply(system.rod_mut(), x);
     while stats.newton_iterations < params.max_iterations {
+        if system.interrupted() {
+            return Err(IntegratorError::Interrupted);
+        }
         stats.newton_iterations += 1;
         problem.residual_and_matrix(system, &mut ws.r, ws.solver.matrix_mut());
         let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;

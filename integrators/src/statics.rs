@@ -131,7 +131,10 @@ impl StaticSolver {
         })
     }
 
-    /// Moves the rod to equilibrium. On error the rod is left as it was.
+    /// Moves the rod to equilibrium. On error the rod is left as it was (and
+    /// [`StaticSolver::pin_forces`] is empty). Every Newton iteration polls
+    /// [`System::interrupted`]: a solve abandoned there (also in a continuation stage)
+    /// returns [`IntegratorError::Interrupted`].
     pub fn solve(&mut self, system: &mut dyn System) -> Result<StepStats, IntegratorError> {
         system.rod().check_finite()?;
         let saved = (
@@ -147,6 +150,8 @@ impl StaticSolver {
         if result.is_err() {
             let rod = system.rod_mut();
             (rod.positions, rod.velocities) = saved;
+            // The multipliers of an abandoned iterate are no pin forces of that state.
+            self.workspace.set_multipliers(std::iter::empty());
         }
         result
     }
@@ -193,6 +198,18 @@ impl StaticSolver {
         if !system.set_stiffness_scale(1.0) {
             return Ok(false);
         }
+        let found = self.stages(system, total);
+        // Restored whatever happened (an interrupted stage returns early).
+        system.set_stiffness_scale(1.0);
+        found
+    }
+
+    /// The stages of [`Self::soften_and_stiffen`], leaving the stiffness scaled.
+    fn stages(
+        &mut self,
+        system: &mut dyn System,
+        total: &mut StepStats,
+    ) -> Result<bool, IntegratorError> {
         let start = system.rod().positions.clone();
         let mut scale = 1.0;
         let mut found = false;
@@ -220,7 +237,6 @@ impl StaticSolver {
                 found = false;
             }
         }
-        system.set_stiffness_scale(1.0);
         Ok(found)
     }
 
@@ -403,8 +419,10 @@ impl StaticSolver {
                     add_counts(total, &stats);
                     self.continuation_steps += 1;
                     point.clone_from(&system.rod().positions);
-                    if matches!(self.newton(system, STATIC_TRY_ITERATIONS, total), Ok(true)) {
-                        return Ok(());
+                    match self.newton(system, STATIC_TRY_ITERATIONS, total) {
+                        Ok(true) => return Ok(()),
+                        Err(e) if !e.is_recoverable() => return Err(e),
+                        _ => {}
                     }
                     system.rod_mut().positions.clone_from(&point);
                     h *= if stats.converged { 4.0 } else { 0.5 };

@@ -1,7 +1,7 @@
 //! `Adaptivity`: adaptive resolution for a rod built in code, with the fields (names,
 //! defaults, meaning, checks) of a scene's `[adaptivity]` table.
 
-use crate::errors::IntoPyResult;
+use crate::errors::{shield, IntoPyResult};
 use crate::scene::{toml_value, without_position};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -30,14 +30,16 @@ impl Adaptivity {
         let value = toml_value(table.as_any(), "")?;
         let text = toml::to_string(&value)
             .map_err(|e| crate::errors::scene_error(py, None, e.to_string()))?;
-        let spec = AdaptivitySpec::from_toml(&text)
-            .map_err(without_position)
-            .py_err(py)?;
-        // The checks that do not depend on the rod now; the others when a simulation
-        // gets it.
-        let initial = spec.min_control_points.unwrap_or(2);
-        spec.validate(initial).py_err(py)?;
-        Ok(Self { spec })
+        shield(|| {
+            let spec = AdaptivitySpec::from_toml(&text)
+                .map_err(without_position)
+                .py_err(py)?;
+            // The checks that do not depend on the rod now; the others when a
+            // simulation gets it.
+            let initial = spec.min_control_points.unwrap_or(2);
+            spec.validate(initial).py_err(py)?;
+            Ok(Self { spec })
+        })
     }
 
     /// The error tolerance, m, for a rod of `rest_length` m.

@@ -1,5 +1,6 @@
 //! What a Python `Simulation` advances: a scene's run or a simulation built in code.
 
+use splinerod::core::Cancel;
 use splinerod::{Error, Real, SceneRun};
 
 /// What advances: a scene's run, or one simulation built in code with its step.
@@ -18,17 +19,26 @@ pub enum Driver {
 }
 
 impl Driver {
-    /// Makes `n` steps (static: solves).
-    pub fn advance(&mut self, n: usize) -> Result<(), Error> {
+    /// Makes `n` steps (static: solves), stopping when `cancel` asks to: between steps,
+    /// or inside one (abandoned and rolled back, see [`splinerod::run::control`]), with
+    /// an interrupted error ([`Error::is_interrupted`]).
+    pub fn advance(&mut self, n: usize, cancel: &Cancel) -> Result<(), Error> {
         match self {
-            Self::Scene(run) => run.advance(n),
+            Self::Scene(run) => {
+                run.set_cancel(cancel.clone());
+                run.advance(n)
+            }
             Self::Code { sim, dt, calls } => {
+                sim.system.cancel = cancel.clone();
                 for _ in 0..n {
-                    *calls += 1;
+                    if cancel.check() {
+                        return Err(Error::Interrupted("between steps"));
+                    }
                     match sim.integrator.solves_equilibrium() {
                         true => sim.settle()?,
                         false => sim.step(*dt)?,
                     };
+                    *calls += 1;
                 }
                 Ok(())
             }

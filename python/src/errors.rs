@@ -9,10 +9,14 @@
 //!   did not converge down to the smallest step, a knot change the rod refused). The
 //!   state is the one before the failing step.
 //! * `OSError`: a scene file could not be read.
-//! * A panic inside splinerod (a bug) raises `SplinerodError` saying so; the object it
-//!   happened in refuses further use, since its state may be half updated.
+//! * `KeyboardInterrupt`: Ctrl-C during a long call ([`crate::interrupt`]); the state is
+//!   the one after the last completed step.
+//! * A panic inside splinerod (a bug) raises `SplinerodError` saying so, never pyo3's
+//!   `PanicException` (every entry point that reaches the library runs under
+//!   [`guard`] or [`shield`]); an object a panic interrupted refuses further use, since
+//!   its state may be half updated.
 
-use pyo3::exceptions::{PyOSError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use splinerod::Error;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -52,6 +56,9 @@ pub fn to_py(py: Python<'_>, error: Error) -> PyErr {
     );
     if let Some(io) = io_error(&error) {
         return PyOSError::new_err((io.raw_os_error().unwrap_or(0), message));
+    }
+    if error.is_interrupted() {
+        return PyKeyboardInterrupt::new_err(message);
     }
     if is_input_error(&error) {
         return scene_error(py, error.field_name(), message);
@@ -113,18 +120,26 @@ pub fn guard<T>(poisoned: &mut bool, f: impl FnOnce() -> PyResult<T>) -> PyResul
              call and may have left its state half updated",
         ));
     }
-    match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(result) => result,
-        Err(payload) => {
-            *poisoned = true;
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".to_string());
-            Err(SplinerodError::new_err(format!(
-                "internal error in splinerod (a bug, please report it): {what}"
-            )))
-        }
-    }
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|payload| {
+        *poisoned = true;
+        Err(panic_error(payload.as_ref()))
+    })
+}
+
+/// Runs `f`, turning a panic into `SplinerodError` (never pyo3's `PanicException`):
+/// for calls that change no existing object (constructors, reads).
+pub fn shield<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|payload| Err(panic_error(payload.as_ref())))
+}
+
+/// The `SplinerodError` of a panic with `payload`.
+fn panic_error(payload: &(dyn std::any::Any + Send)) -> PyErr {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".to_string());
+    SplinerodError::new_err(format!(
+        "internal error in splinerod (a bug, please report it): {what}"
+    ))
 }

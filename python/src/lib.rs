@@ -5,12 +5,14 @@
 //! the GIL released, state as numpy arrays (one copy per call); rods built in code from
 //! `Material`, `BSplineSpace`, `Rod`, `Pin`, energies and integrators. Errors surface as
 //! `SceneError` (bad input, with the field named), `SplinerodError` (the run could not
-//! go on, or an internal panic) and `OSError` (see `errors`).
+//! go on, or an internal panic, never `PanicException`), `OSError` and, on Ctrl-C
+//! during a long call, `KeyboardInterrupt` (see `errors`, `interrupt`).
 
 mod adaptivity;
 mod arrays;
 mod driver;
 mod errors;
+mod interrupt;
 mod model;
 mod scene;
 mod simulation;

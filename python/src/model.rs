@@ -3,7 +3,7 @@
 //! Python object can be reused (two rods from one basis, say).
 
 use crate::arrays::{points_array, points_from, values_array, vector_from};
-use crate::errors::IntoPyResult;
+use crate::errors::{scene_error, shield, IntoPyResult};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use splinerod::core::BasisSpace as _;
@@ -62,7 +62,7 @@ impl BSplineSpace {
     /// 1 values, non-decreasing).
     #[new]
     fn new(py: Python<'_>, degree: usize, knots: Vec<Real>) -> PyResult<Self> {
-        let inner = splinerod::BSplineSpace::new(degree, knots).py_err(py)?;
+        let inner = shield(|| splinerod::BSplineSpace::new(degree, knots).py_err(py))?;
         Ok(Self { inner })
     }
 
@@ -76,8 +76,10 @@ impl BSplineSpace {
         control_points: usize,
         length: Real,
     ) -> PyResult<Self> {
-        let inner =
-            splinerod::BSplineSpace::clamped_uniform(degree, control_points, length).py_err(py)?;
+        check_count(py, control_points)?;
+        let inner = shield(|| {
+            splinerod::BSplineSpace::clamped_uniform(degree, control_points, length).py_err(py)
+        })?;
         Ok(Self { inner })
     }
 
@@ -123,7 +125,8 @@ impl PeriodicBSplineSpace {
     /// non-decreasing values below `period`): one control point per breakpoint.
     #[new]
     fn new(py: Python<'_>, degree: usize, breaks: Vec<Real>, period: Real) -> PyResult<Self> {
-        let inner = splinerod::PeriodicBSplineSpace::new(degree, breaks, period).py_err(py)?;
+        let inner =
+            shield(|| splinerod::PeriodicBSplineSpace::new(degree, breaks, period).py_err(py))?;
         Ok(Self { inner })
     }
 
@@ -136,8 +139,10 @@ impl PeriodicBSplineSpace {
         control_points: usize,
         period: Real,
     ) -> PyResult<Self> {
-        let inner =
-            splinerod::PeriodicBSplineSpace::uniform(degree, control_points, period).py_err(py)?;
+        check_count(py, control_points)?;
+        let inner = shield(|| {
+            splinerod::PeriodicBSplineSpace::uniform(degree, control_points, period).py_err(py)
+        })?;
         Ok(Self { inner })
     }
 
@@ -184,11 +189,7 @@ fn basis_from(basis: &Bound<'_, PyAny>) -> PyResult<Box<dyn splinerod::BasisSpac
         return Ok(Box::new(b.get().inner.clone()));
     }
     let message = "`basis` must be a BSplineSpace or a PeriodicBSplineSpace";
-    Err(crate::errors::scene_error(
-        basis.py(),
-        Some("basis"),
-        message.to_string(),
-    ))
+    Err(scene_error(basis.py(), Some("basis"), message.to_string()))
 }
 
 /// A rod: a B-spline curve whose control points are the degrees of freedom, with its
@@ -217,10 +218,8 @@ impl Rod {
         let mut points = points_from(control_points, "control_points", Some(distinct))?;
         // A closed rod stores the first `degree` points again after the last.
         points.extend_from_within(..basis.count() - distinct);
-        let rod = splinerod::Rod::new(material.rust(), basis, points);
-        Ok(Self {
-            inner: rod.py_err(py)?,
-        })
+        let rod = shield(|| splinerod::Rod::new(material.rust(), basis, points).py_err(py))?;
+        Ok(Self { inner: rod })
     }
 
     /// A straight rod at rest from `start` to `end` (control points at the Greville
@@ -234,10 +233,9 @@ impl Rod {
     ) -> PyResult<Self> {
         let py = start.py();
         let (a, b) = (vector_from(start, "start")?, vector_from(end, "end")?);
-        let rod = splinerod::Rod::straight(material.rust(), Box::new(basis.inner.clone()), a, b);
-        Ok(Self {
-            inner: rod.py_err(py)?,
-        })
+        let basis = Box::new(basis.inner.clone());
+        let rod = shield(|| splinerod::Rod::straight(material.rust(), basis, a, b).py_err(py))?;
+        Ok(Self { inner: rod })
     }
 
     /// A closed rod on `basis` fitted to the circle of `radius` (m) about `center` in
@@ -254,16 +252,11 @@ impl Rod {
     ) -> PyResult<Self> {
         let center = center.map_or(Ok(nalgebra::Vector3::zeros()), |c| vector_from(c, "center"))?;
         let normal = normal.map_or(Ok(nalgebra::Vector3::z()), |n| vector_from(n, "normal"))?;
-        let rod = splinerod::Rod::ring(
-            material.rust(),
-            Box::new(basis.inner.clone()),
-            center,
-            normal,
-            radius,
-        );
-        Ok(Self {
-            inner: rod.py_err(py)?,
-        })
+        let basis = Box::new(basis.inner.clone());
+        let rod = shield(|| {
+            splinerod::Rod::ring(material.rust(), basis, center, normal, radius).py_err(py)
+        })?;
+        Ok(Self { inner: rod })
     }
 
     /// Whether the rod is closed (on a `PeriodicBSplineSpace`).
@@ -282,7 +275,7 @@ impl Rod {
     fn set_damping(&mut self, py: Python<'_>, damping: Real) -> PyResult<()> {
         if !(damping.is_finite() && damping >= 0.0) {
             let message = format!("`damping` = {damping}: must be finite and non-negative");
-            return Err(crate::errors::scene_error(py, Some("damping"), message));
+            return Err(scene_error(py, Some("damping"), message));
         }
         self.inner.damping = damping;
         Ok(())
@@ -335,14 +328,14 @@ impl Pin {
     /// Pins the material point `at` (m) of `rod` where it is now.
     #[staticmethod]
     fn here(py: Python<'_>, rod: &Rod, at: Real) -> PyResult<Self> {
-        let inner = splinerod::Pin::here(&rod.inner, at).py_err(py)?;
+        let inner = shield(|| splinerod::Pin::here(&rod.inner, at).py_err(py))?;
         Ok(Self { inner })
     }
 
     /// Pins the tangent at `at` (m): the control point next to an end, for a clamp.
     #[staticmethod]
     fn tangent_at(py: Python<'_>, rod: &Rod, at: Real) -> PyResult<Self> {
-        let inner = splinerod::Pin::tangent_at(&rod.inner, at).py_err(py)?;
+        let inner = shield(|| splinerod::Pin::tangent_at(&rod.inner, at).py_err(py))?;
         Ok(Self { inner })
     }
 
@@ -350,7 +343,7 @@ impl Pin {
     fn sliding(&self, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = axis.py();
         let axis = vector_from(axis, "axis")?;
-        let inner = self.inner.sliding(axis).py_err(py)?;
+        let inner = shield(|| self.inner.sliding(axis).py_err(py))?;
         Ok(Self { inner })
     }
 
@@ -373,4 +366,16 @@ impl Pin {
             self.inner.at, p.x, p.y, p.z
         )
     }
+}
+
+/// `SceneError` naming `control_points` past what a basis may have
+/// ([`splinerod::core::MAX_BASIS_FUNCTIONS`]), checked before anything is allocated.
+fn check_count(py: Python<'_>, control_points: usize) -> PyResult<()> {
+    let max = splinerod::core::MAX_BASIS_FUNCTIONS;
+    if control_points <= max {
+        return Ok(());
+    }
+    let message =
+        format!("`control_points` = {control_points}: more than the {max} a basis may have");
+    Err(scene_error(py, Some("control_points"), message))
 }

@@ -1,7 +1,8 @@
 //! `Scene`: a scene from TOML (a file or text) or from a dict of the same schema, with
 //! the CLI's validation and error messages.
 
-use crate::errors::{scene_error, IntoPyResult};
+use crate::errors::{scene_error, shield, IntoPyResult};
+use crate::interrupt::Interrupt;
 use crate::simulation::Simulation;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
@@ -23,10 +24,12 @@ impl Scene {
         let py = table.py();
         let value = toml_value(table.as_any(), "")?;
         let text = toml::to_string(&value).map_err(|e| scene_error(py, None, e.to_string()))?;
-        let scene = splinerod::Scene::from_toml(&text)
-            .map_err(without_position)
-            .py_err(py)?;
-        Ok(Self { scene, text })
+        shield(|| {
+            let interrupt = Interrupt::new();
+            let scene = splinerod::Scene::from_toml_cancellable(&text, &interrupt.cancel);
+            let scene = interrupt.result(py, scene.map_err(without_position))?;
+            Ok(Self { scene, text })
+        })
     }
 
     /// A scene from a TOML file (a path: `str` or `os.PathLike`) or TOML text (a `str`
@@ -34,11 +37,15 @@ impl Scene {
     #[staticmethod]
     fn from_toml(source: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = source.py();
+        let interrupt = Interrupt::new();
         let path = match source.cast::<PyString>() {
             Ok(s) => {
                 let s = s.to_str()?;
                 if s.contains('\n') || s.contains('=') {
-                    let scene = splinerod::Scene::from_toml(s).py_err(py)?;
+                    let scene = shield(|| {
+                        let scene = splinerod::Scene::from_toml_cancellable(s, &interrupt.cancel);
+                        interrupt.result(py, scene)
+                    })?;
                     return Ok(Self {
                         scene,
                         text: s.to_string(),
@@ -48,7 +55,10 @@ impl Scene {
             }
             Err(_) => source.extract::<std::path::PathBuf>()?,
         };
-        let scene = splinerod::Scene::load(&path).py_err(py)?;
+        let scene = shield(|| {
+            let scene = splinerod::Scene::load_cancellable(&path, &interrupt.cancel);
+            interrupt.result(py, scene)
+        })?;
         let text = std::fs::read_to_string(&path).map_err(|e| {
             let error = Error::Io {
                 path: path.display().to_string(),
@@ -82,12 +92,14 @@ impl Scene {
     /// limits is refused (`SceneError` naming the fields) unless `allow_large=True`.
     #[pyo3(signature = (allow_large = false))]
     fn simulation(&self, py: Python<'_>, allow_large: bool) -> PyResult<Simulation> {
-        if !allow_large {
-            let limits = splinerod::scene::Limits::default();
-            self.scene.check_limits(&limits).py_err(py)?;
-        }
-        let run = py.detach(|| SceneRun::new(&self.scene)).py_err(py)?;
-        Ok(Simulation::from_scene(run))
+        shield(|| {
+            if !allow_large {
+                let limits = splinerod::scene::Limits::default();
+                self.scene.check_limits(&limits).py_err(py)?;
+            }
+            let run = py.detach(|| SceneRun::new(&self.scene)).py_err(py)?;
+            Ok(Simulation::from_scene(run))
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -113,9 +125,18 @@ pub fn without_position(error: Error) -> Error {
     }
 }
 
+/// Deepest nesting of lists and dicts in a scene dict (a scene needs four).
+pub const MAX_DEPTH: usize = 64;
+
 /// `obj` as a TOML value; `SceneError` naming the dotted `path` for anything TOML has
-/// no value for (None, objects).
+/// no value for (None, objects), a list or dict inside itself, or nesting deeper than
+/// [`MAX_DEPTH`] (either would recurse without end).
 pub fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
+    convert(obj, path, &mut Vec::new())
+}
+
+/// [`toml_value`] inside the containers `open` (their addresses, outermost first).
+fn convert(obj: &Bound<'_, PyAny>, path: &str, open: &mut Vec<usize>) -> PyResult<toml::Value> {
     let py = obj.py();
     if obj.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(obj.extract()?));
@@ -133,6 +154,41 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
     if let Ok(s) = obj.cast::<PyString>() {
         return Ok(toml::Value::String(s.to_str()?.to_string()));
     }
+    let container = obj.is_instance_of::<PyDict>()
+        || obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>()
+        || obj.hasattr("tolist")?;
+    if !container {
+        let kind = obj.get_type().name()?;
+        let message = format!(
+            "`{path}`: a {kind} is not a scene value (numbers, strings, booleans, lists, dicts)"
+        );
+        return Err(scene_error(py, Some(path), message));
+    }
+    let id = obj.as_ptr() as usize;
+    let at = if path.is_empty() { "the scene" } else { path };
+    if open.contains(&id) {
+        let message =
+            format!("`{at}` contains itself: a scene value cannot hold the list or dict it is in");
+        return Err(scene_error(py, Some(path), message));
+    }
+    if open.len() >= MAX_DEPTH {
+        let message = format!("`{at}`: lists and dicts nested more than {MAX_DEPTH} deep");
+        return Err(scene_error(py, Some(path), message));
+    }
+    open.push(id);
+    let value = container_value(obj, path, open);
+    open.pop();
+    value
+}
+
+/// A dict, list, tuple or numpy value as a TOML value (see [`convert`]).
+fn container_value(
+    obj: &Bound<'_, PyAny>,
+    path: &str,
+    open: &mut Vec<usize>,
+) -> PyResult<toml::Value> {
+    let py = obj.py();
     if let Ok(dict) = obj.cast::<PyDict>() {
         let mut table = toml::Table::new();
         for (key, value) in dict.iter() {
@@ -146,25 +202,17 @@ pub fn toml_value(obj: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
             } else {
                 format!("{path}.{key}")
             };
-            table.insert(key, toml_value(&value, &inner)?);
+            table.insert(key, convert(&value, &inner, open)?);
         }
         return Ok(toml::Value::Table(table));
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        let items = obj.try_iter()?.enumerate();
-        let values = items.map(|(i, item)| toml_value(&item?, &format!("{path}[{i}]")));
-        return Ok(toml::Value::Array(values.collect::<PyResult<_>>()?));
+        let mut values = Vec::new();
+        for (i, item) in obj.try_iter()?.enumerate() {
+            values.push(convert(&item?, &format!("{path}[{i}]"), open)?);
+        }
+        return Ok(toml::Value::Array(values));
     }
-    if obj.hasattr("tolist")? {
-        // numpy arrays and scalars: their Python equivalents.
-        return toml_value(&obj.call_method0("tolist")?, path);
-    }
-    let kind = obj.get_type().name()?;
-    Err(scene_error(
-        py,
-        Some(path),
-        format!(
-            "`{path}`: a {kind} is not a scene value (numbers, strings, booleans, lists, dicts)"
-        ),
-    ))
+    // numpy arrays and scalars: their Python equivalents.
+    convert(&obj.call_method0("tolist")?, path, open)
 }

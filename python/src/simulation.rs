@@ -10,7 +10,8 @@
 use crate::adaptivity::Adaptivity;
 use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
 use crate::driver::Driver;
-use crate::errors::{guard, scene_error, IntoPyResult, SplinerodError};
+use crate::errors::{guard, scene_error, shield, IntoPyResult, SplinerodError};
+use crate::interrupt::Interrupt;
 use crate::system::{Integrator, RodSystem};
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3};
@@ -76,11 +77,15 @@ impl Simulation {
         Ok((left * (1.0 - 1e-12)).ceil().max(0.0) as usize)
     }
 
-    /// Makes `n` steps with the GIL released.
+    /// Makes `n` steps with the GIL released; Ctrl-C raises `KeyboardInterrupt` within
+    /// about a second, the state the one after the last completed step
+    /// ([`crate::interrupt`]).
     fn advance(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
-        let driver = &mut self.driver;
+        let interrupt = Interrupt::new();
+        let (driver, cancel) = (&mut self.driver, &interrupt.cancel);
         guard(&mut self.poisoned, || {
-            py.detach(|| driver.advance(n)).py_err(py)
+            let made = py.detach(|| driver.advance(n, cancel));
+            interrupt.result(py, made)
         })
     }
 }
@@ -107,38 +112,40 @@ impl Simulation {
         adaptivity: Option<PyRef<'_, Adaptivity>>,
         error_estimate: bool,
     ) -> PyResult<Self> {
-        let integrator = match integrator {
-            Some(i) => i.build(py)?,
-            None => Integrator::default_euler().build(py)?,
-        };
-        let statics = integrator.solves_equilibrium();
-        let dt = match (dt, statics) {
-            (Some(dt), _) if dt.is_finite() && dt > 0.0 => dt,
-            (None, true) => 0.0,
-            (dt, _) => {
-                let message =
-                    format!("`dt` = {dt:?}: a time integrator needs a finite, positive step");
-                return Err(scene_error(py, Some("dt"), message));
+        shield(|| {
+            let integrator = match integrator {
+                Some(i) => i.build(py)?,
+                None => Integrator::default_euler().build(py)?,
+            };
+            let statics = integrator.solves_equilibrium();
+            let dt = match (dt, statics) {
+                (Some(dt), _) if dt.is_finite() && dt > 0.0 => dt,
+                (None, true) => 0.0,
+                (dt, _) => {
+                    let message =
+                        format!("`dt` = {dt:?}: a time integrator needs a finite, positive step");
+                    return Err(scene_error(py, Some("dt"), message));
+                }
+            };
+            let system = system.build(py)?;
+            let (length, initial) = (system.rod.material().rest_length, system.rod.len());
+            let mut sim = splinerod::Simulation::new(system, integrator);
+            if let Some(a) = adaptivity {
+                if let Some(adapter) = a.adapter(py, length, initial)? {
+                    sim = sim.with_adapter(adapter);
+                }
             }
-        };
-        let system = system.build(py)?;
-        let (length, initial) = (system.rod.material().rest_length, system.rod.len());
-        let mut sim = splinerod::Simulation::new(system, integrator);
-        if let Some(a) = adaptivity {
-            if let Some(adapter) = a.adapter(py, length, initial)? {
-                sim = sim.with_adapter(adapter);
+            if error_estimate {
+                sim = sim.estimate_errors();
             }
-        }
-        if error_estimate {
-            sim = sim.estimate_errors();
-        }
-        Ok(Self {
-            driver: Driver::Code {
-                sim: Box::new(sim),
-                dt,
-                calls: 0,
-            },
-            poisoned: false,
+            Ok(Self {
+                driver: Driver::Code {
+                    sim: Box::new(sim),
+                    dt,
+                    calls: 0,
+                },
+                poisoned: false,
+            })
         })
     }
 
@@ -321,11 +328,13 @@ impl Simulation {
     /// scene: one per `[[pins]]` entry, as the JSON's `pin_forces`).
     #[getter]
     fn pin_forces<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        let forces = match &self.driver {
-            Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
-            Driver::Code { sim, .. } => sim.integrator.pin_forces(),
-        };
-        points_array(py, &forces)
+        let forces = shield(|| {
+            Ok(match &self.driver {
+                Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
+                Driver::Code { sim, .. } => sim.integrator.pin_forces(),
+            })
+        });
+        points_array(py, &forces.unwrap_or_default())
     }
 
     /// Material points at coordinates `s` (m, a number or a 1-D array) of `member`:
@@ -334,7 +343,7 @@ impl Simulation {
     fn positions<'py>(&self, s: &Bound<'py, PyAny>, member: usize) -> PyResult<Bound<'py, PyAny>> {
         let py = s.py();
         let (values, scalar) = values_from(s, "s")?;
-        let points = points_at(py, self.member(py, member)?, &values)?;
+        let points = shield(|| points_at(py, self.member(py, member)?, &values))?;
         let array = points_array(py, &points);
         match scalar {
             true => array.get_item(0),
@@ -352,17 +361,21 @@ impl Simulation {
         let py = s.py();
         let (values, _) = values_from(s, "s")?;
         let sim = self.member(py, member)?;
-        points_at(py, sim, &values)?;
-        Ok(values_array(py, sim.system.tension(&values)))
+        let tension = shield(|| {
+            points_at(py, sim, &values)?;
+            Ok(sim.system.tension(&values))
+        })?;
+        Ok(values_array(py, tension))
     }
 
     /// Energies of `member`, J: `kinetic` and one entry per energy term.
     #[pyo3(signature = (member = 0))]
     fn energies<'py>(&self, py: Python<'py>, member: usize) -> PyResult<Bound<'py, PyDict>> {
         let sim = self.member(py, member)?;
+        let breakdown = shield(|| Ok(sim.system.energy_breakdown()))?;
         let dict = PyDict::new(py);
         dict.set_item("kinetic", sim.system.rod.kinetic_energy())?;
-        for (name, value) in sim.system.energy_breakdown() {
+        for (name, value) in breakdown {
             dict.set_item(name, value)?;
         }
         Ok(dict)
@@ -376,8 +389,8 @@ impl Simulation {
         let py = s.py();
         let (values, _) = values_from(s, "s")?;
         let sims = self.driver.sims();
-        let all = sims.iter().map(|sim| points_at(py, sim, &values));
-        Ok(stacked_points(py, &all.collect::<PyResult<Vec<_>>>()?))
+        let all: Vec<_> = shield(|| sims.iter().map(|sim| points_at(py, sim, &values)).collect())?;
+        Ok(stacked_points(py, &all))
     }
 
     /// Control points of every member, `(members, n, 3)`; `ValueError` when members
@@ -411,7 +424,8 @@ impl Simulation {
         let sims = self.driver.sims();
         let kinetic = sims.iter().map(|s| s.system.rod.kinetic_energy()).collect();
         dict.set_item("kinetic", values_array(py, kinetic))?;
-        let breakdowns: Vec<_> = sims.iter().map(|s| s.system.energy_breakdown()).collect();
+        let breakdowns: Vec<_> =
+            shield(|| Ok(sims.iter().map(|s| s.system.energy_breakdown()).collect()))?;
         for (k, (name, _)) in breakdowns[0].iter().enumerate() {
             let values = breakdowns
                 .iter()
@@ -428,7 +442,7 @@ impl Simulation {
                 "to_json reports a scene's run: build the simulation with Scene(...).simulation()";
             return Err(SplinerodError::new_err(message));
         };
-        let result = run.result().py_err(py)?;
+        let result = shield(|| run.result().py_err(py))?;
         serde_json::to_string_pretty(&result).map_err(|e| SplinerodError::new_err(e.to_string()))
     }
 

@@ -9,17 +9,21 @@
 //!
 //! Errors print one line naming the field or file and exit with code 2; so does a
 //! `SPLINEROD_KERNELS` value that is not understood, before any command runs (see
-//! `splinerod_core::kernels`: `auto`, `portable` or `avx2-fma`).
+//! `splinerod_core::kernels`: `auto`, `portable` or `avx2-fma`). SIGINT or SIGTERM
+//! stops a run (also inside a long step or solve, and during the scene's setup) with
+//! exit code 130. A closed standard output (`| head`) is not an error: what is left to
+//! print is dropped, the files are still written.
 
 use clap::{Args, Parser, Subcommand};
+use splinerod::core::Cancel;
 use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
 use splinerod::run::checkpoint::CheckpointPlan;
-use splinerod::run::runner::RunControl;
+use splinerod::run::control::{RunControl, STOP_GRACE};
 use splinerod::run::shard::Shard;
 use splinerod::{Error, Observer};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 #[derive(Parser)]
@@ -152,10 +156,34 @@ fn main() -> ExitCode {
     match execute(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e}");
+            complain(format_args!("error: {e}\n"));
             ExitCode::from(2)
         }
     }
+}
+
+/// Prints `text` on standard output; a closed pipe (`splinerod run … | head -1`) drops
+/// it silently, other failures are reported on standard error. The run goes on.
+fn say(text: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_fmt(text).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            complain(format_args!("warning: standard output: {e}\n"));
+        }
+        _ => {}
+    }
+}
+
+/// Prints `text` on standard error, ignoring failures (a closed pipe).
+fn complain(text: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_fmt(text);
+}
+
+/// `println!` through [`say`].
+macro_rules! say {
+    ($($t:tt)*) => { say(format_args!("{}\n", format_args!($($t)*))) };
 }
 
 fn execute(cli: Cli) -> Result<ExitCode, Error> {
@@ -164,7 +192,7 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
         Command::Resume { dir, max_steps } => resume(&dir, max_steps),
         Command::Report { quick, out } => {
             let report = splinerod::report::write_report(&out, quick)?;
-            println!(
+            say!(
                 "static catenary order {:.2}; wrote {}",
                 report.order,
                 out.join("report.md").display()
@@ -201,59 +229,66 @@ fn write_json(path: &PathBuf, value: &impl serde::Serialize) -> Result<(), Error
         path: path.display().to_string(),
         source,
     })?;
-    println!("wrote {}", path.display());
+    say!("wrote {}", path.display());
     Ok(())
 }
 
 #[cfg(feature = "parallel")]
 fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
     let b = splinerod::bench::measure(quick)?;
-    println!(
+    say!(
         "one implicit Euler step, 16 control points: {:.2} µs ({:.2} µs with the consistent stretching)",
         b.step_us_16, b.step_us_16_consistent
     );
-    println!(
+    say!(
         "one static Newton iteration, 16 control points: {:.2} µs",
         b.static_newton_us_16
     );
-    println!(
+    say!(
         "8 independent 16-point rods in one system: {:.3} × eight single-rod steps",
         b.world_overhead_8
     );
-    println!(
+    say!(
         "knot tying with contact (knot_tying_adaptive.toml, first 0.5 s): {:.0} µs median step",
         b.knot_step_us
     );
     for (n, ns) in &b.per_cp_ns {
-        println!("per control point per step at {n}: {ns:.0} ns");
+        say!("per control point per step at {n}: {ns:.0} ns");
     }
-    println!(
+    say!(
         "flatness (max/min per control point): {:.3}",
         b.per_cp_flatness
     );
-    println!(
+    say!(
         "ensemble of 16-point rods: {:.0} rod-steps/s on 1 thread, {:.0} on {} ({:.0} % efficiency)",
         b.ensemble_rod_steps_per_s_1,
         b.ensemble_rod_steps_per_s_all,
         b.threads,
         100.0 * b.parallel_efficiency
     );
-    println!(
+    say!(
         "  batched four at a time: {:.2} times the {:.0} rod-steps/s of members stepped alone",
-        b.batched_speedup, b.ensemble_rod_steps_per_s_alone_1
+        b.batched_speedup,
+        b.ensemble_rod_steps_per_s_alone_1
     );
-    println!("memory: {:.0} bytes per control point", b.bytes_per_cp);
-    println!(
+    say!("memory: {:.0} bytes per control point", b.bytes_per_cp);
+    say!(
         "checkpoint of the default scene after 100 steps: {:.0} bytes, written in {:.0} µs",
-        b.checkpoint_bytes_16, b.checkpoint_us_16
+        b.checkpoint_bytes_16,
+        b.checkpoint_us_16
     );
-    println!(
+    say!(
         "stiff catenary (EA = 1e4) settled to {:.2e} m with {} control points in {} steps, {:.3} s",
-        b.stiff_catenary.1, b.stiff_catenary.0, b.stiff_catenary.2, b.stiff_catenary_settle_s
+        b.stiff_catenary.1,
+        b.stiff_catenary.0,
+        b.stiff_catenary.2,
+        b.stiff_catenary_settle_s
     );
-    println!(
+    say!(
         "hard cases converged: {} of {}; default scene: {:.3} Newton iterations per step",
-        b.hard_cases_converged, b.hard_cases_total, b.newton_per_step_default
+        b.hard_cases_converged,
+        b.hard_cases_total,
+        b.newton_per_step_default
     );
     if let Some(path) = json {
         let text = serde_json::to_string_pretty(&b)?;
@@ -261,7 +296,7 @@ fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
             path: path.display().to_string(),
             source,
         })?;
-        println!("wrote {}", path.display());
+        say!("wrote {}", path.display());
     }
     Ok(())
 }
@@ -306,11 +341,15 @@ fn run_arguments() -> Vec<String> {
 }
 
 fn run(args: RunArgs, line: Vec<String>) -> Result<ExitCode, Error> {
+    let signals = stop_on_signals()?;
     let text = std::fs::read_to_string(&args.scene).map_err(|source| Error::Io {
         path: args.scene.display().to_string(),
         source,
     })?;
-    let scene = splinerod::Scene::load(&args.scene)?;
+    let scene = match splinerod::Scene::load_cancellable(&args.scene, &signals) {
+        Err(e) if e.is_interrupted() => return Ok(stopped_without_state(&e)),
+        loaded => loaded?,
+    };
     let shard = match &args.shard {
         Some(text) => Some(Shard::parse(text)?),
         None => None,
@@ -332,11 +371,13 @@ fn run(args: RunArgs, line: Vec<String>) -> Result<ExitCode, Error> {
         },
         plan,
         args.max_steps,
+        signals,
     )
 }
 
 /// `splinerod resume DIR`: the checkpointed command line's outputs, continued.
 fn resume(dir: &std::path::Path, max_steps: Option<usize>) -> Result<ExitCode, Error> {
+    let signals = stop_on_signals()?;
     let saved = splinerod::run::checkpoint::resumable(dir)?;
     let line = std::iter::once("run".to_string()).chain(saved.args.iter().cloned());
     let parsed = RunLine::try_parse_from(line).map_err(|e| {
@@ -355,6 +396,7 @@ fn resume(dir: &std::path::Path, max_steps: Option<usize>) -> Result<ExitCode, E
         |observers, control| splinerod::run::runner::resume(dir, observers, control),
         plan,
         max_steps,
+        signals,
     )
 }
 
@@ -390,45 +432,63 @@ fn checkpoint_plan(
     }))
 }
 
-/// Runs `go` with the outputs `args` ask for, stopping on signals and after
+/// Runs `go` with the outputs `args` ask for, stopping on `signals` and after
 /// `max_steps`; prints the summary, writes the JSON; exit 130 if a signal stopped it.
 fn execute_run(
     args: &RunArgs,
     go: impl FnOnce(&mut [&mut dyn Observer], &RunControl) -> Result<splinerod::RunResult, Error>,
     plan: Option<CheckpointPlan>,
     max_steps: Option<usize>,
+    signals: Cancel,
 ) -> Result<ExitCode, Error> {
     let mut boxed = observers(args)?;
     let mut refs: Vec<&mut dyn Observer> = Vec::with_capacity(boxed.len());
     for b in boxed.iter_mut() {
         refs.push(b.as_mut());
     }
-    let signalled = Arc::new(AtomicBool::new(false));
-    stop_on_signals(&signalled)?;
+    let dir = plan.as_ref().map(|p| p.dir.display().to_string());
     let control = RunControl {
         max_steps,
-        stop: Some(signalled.clone()),
+        cancel: signals.clone(),
         checkpoint: plan,
     };
-    let result = go(&mut refs, &control)?;
-    print!("{}", result.summary());
+    let result = match go(&mut refs, &control) {
+        Err(e) if e.is_interrupted() => return Ok(stopped_without_state(&e)),
+        result => result?,
+    };
+    say(format_args!("{}", result.summary()));
     if let Some(path) = &args.json {
         write_json(path, &result)?;
     }
-    if signalled.load(Ordering::SeqCst) {
-        eprintln!(
-            "interrupted: stopped at t = {} s after {} steps",
-            result.time, result.steps
-        );
-        return Ok(ExitCode::from(INTERRUPTED));
+    if !signals.requested() {
+        return Ok(ExitCode::SUCCESS);
     }
-    Ok(ExitCode::SUCCESS)
+    let abandoned = "abandoned the step under way (rolled back) and ";
+    let how = if result.abandoned_step { abandoned } else { "" };
+    complain(format_args!(
+        "interrupted: {how}stopped at t = {} s after {} steps\n",
+        result.time, result.steps
+    ));
+    if let (Some(dir), false) = (dir, result.checkpoint_at_stop) {
+        complain(format_args!(
+            "the checkpoint in {dir} was not updated at the stop (the abandoned step could not be undone exactly): it holds the last one written, if any\n"
+        ));
+    }
+    Ok(ExitCode::from(INTERRUPTED))
 }
 
-/// SIGINT and SIGTERM raise `flag` (the run stops at the end of its step and writes
-/// its outputs); a second one ends the process at once with the interrupted code.
-fn stop_on_signals(flag: &Arc<AtomicBool>) -> Result<(), Error> {
+/// The exit of a run a signal stopped before it had a state to write.
+fn stopped_without_state(e: &Error) -> ExitCode {
+    complain(format_args!("{e}: nothing written\n"));
+    ExitCode::from(INTERRUPTED)
+}
+
+/// SIGINT and SIGTERM raise the returned request: the run stops at the end of its step,
+/// or abandons a step still running [`STOP_GRACE`] later, and writes its outputs; a
+/// second signal ends the process at once with the interrupted code.
+fn stop_on_signals() -> Result<Cancel, Error> {
     use signal_hook::consts::{SIGINT, SIGTERM};
+    let flag = Arc::new(AtomicBool::new(false));
     for signal in [SIGINT, SIGTERM] {
         let installed = signal_hook::flag::register_conditional_shutdown(
             signal,
@@ -441,5 +501,5 @@ fn stop_on_signals(flag: &Arc<AtomicBool>) -> Result<(), Error> {
             source,
         })?;
     }
-    Ok(())
+    Ok(Cancel::from_flag(flag).with_grace(STOP_GRACE))
 }

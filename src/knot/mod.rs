@@ -79,4 +79,6 @@ pub use diagram::{
     is_alternating, is_trefoil_diagram, knot_determinant, knot_diagram, knot_extent,
     projection_crossings, tightness, Crossing, KnotDiagram, Tightness,
 };
-pub use shape::{overhand_knot, OverhandKnot, OverhandSpec, MAX_CONTROL_POINTS};
+pub use shape::{
+    overhand_knot, overhand_knot_cancellable, OverhandKnot, OverhandSpec, MAX_CONTROL_POINTS,
+};

@@ -6,7 +6,7 @@ use super::shape::OverhandSpec;
 use crate::Error;
 use nalgebra::{DMatrix, DVector, Vector3};
 use splinerod_core::basis::spans;
-use splinerod_core::{BSplineSpace, BasisSpace, BasisValues, GaussLegendre, Real};
+use splinerod_core::{BSplineSpace, BasisSpace, BasisValues, Cancel, GaussLegendre, Real};
 
 /// Fit samples per control point (at least `MIN_FIT_SAMPLES` in all).
 const FIT_SAMPLES_PER_POINT: usize = 40;
@@ -27,16 +27,27 @@ const NEIGHBOURHOOD: Real = 0.9;
 
 /// Control points of the B-spline fitted to `target` and relaxed (module docs), with its
 /// arclength.
+///
+/// Polls `cancel` before every iteration ([`Cancel::requested`]: the fit is setup, with
+/// no step to finish) and returns [`Error::Interrupted`] when a stop is asked.
 pub(super) fn relaxed_fit(
     target: &Target,
     spec: &OverhandSpec,
+    cancel: &Cancel,
 ) -> Result<(Vec<Vector3<Real>>, Real), Error> {
+    let stopped = || Error::Interrupted("during the scene's setup (the overhand knot's fit)");
     let mut fit = Fit::new(target, spec)?;
     let mut q = fit.least_squares()?;
     let mut lambda = 1e-3;
     for _ in 0..RELAX_ITERATIONS {
+        if cancel.requested() {
+            return Err(stopped());
+        }
         fit.project(&q)?;
-        q = fit.relax_step(q, &mut lambda)?;
+        q = fit.relax_step(q, &mut lambda, cancel)?;
+    }
+    if cancel.requested() {
+        return Err(stopped());
     }
     let rest_length = arclength(&q, &fit.space)?;
     Ok((q, rest_length))
@@ -210,9 +221,14 @@ impl<'a> Fit<'a> {
         &self,
         q: Vec<Vector3<Real>>,
         lambda: &mut Real,
+        cancel: &Cancel,
     ) -> Result<Vec<Vector3<Real>>, Error> {
         let normal = self.energy(&q)?;
         for _ in 0..20 {
+            if cancel.requested() {
+                // The caller sees the request before its next iteration.
+                return Ok(q);
+            }
             if let Some(dx) = normal.step(*lambda) {
                 let longest = dx
                     .as_slice()

@@ -5,7 +5,7 @@ use super::diagram::{is_trefoil_diagram, polyline_crossings};
 use super::relax::{relaxed_fit, sample_curve, Target};
 use crate::Error;
 use nalgebra::Vector3;
-use splinerod_core::{BSplineSpace, Material, Real, Rod, MAX_DEGREE};
+use splinerod_core::{BSplineSpace, Cancel, Material, Real, Rod, MAX_DEGREE};
 use std::f64::consts::PI;
 
 /// Amplitude `H` of the trefoil's heights, knot units.
@@ -111,6 +111,15 @@ impl OverhandKnot {
 /// the field if `spec` is out of range, or `control_points` if they are too few for the
 /// B-spline to stay knotted.
 pub fn overhand_knot(spec: &OverhandSpec) -> Result<OverhandKnot, Error> {
+    overhand_knot_cancellable(spec, &Cancel::none())
+}
+
+/// [`overhand_knot`], polling `cancel` during the fit (a few seconds for a hundred
+/// control points): a stop asked returns [`Error::Interrupted`].
+pub fn overhand_knot_cancellable(
+    spec: &OverhandSpec,
+    cancel: &Cancel,
+) -> Result<OverhandKnot, Error> {
     spec.validate()?;
     let target = Target::new(world_polyline(spec));
     if !(target.length().is_finite() && target.length() > 0.0) {
@@ -120,7 +129,7 @@ pub fn overhand_knot(spec: &OverhandSpec) -> Result<OverhandKnot, Error> {
             "is out of the representable range",
         ));
     }
-    let (q, rest_length) = relaxed_fit(&target, spec)?;
+    let (q, rest_length) = relaxed_fit(&target, spec, cancel)?;
     let basis = BSplineSpace::clamped_uniform(spec.degree, q.len(), rest_length)?;
     let (s, points) = sample_curve(&basis, &q, CHECK_SAMPLES)?;
     if !is_trefoil_diagram(&polyline_crossings(&points, &s, &Vector3::y())) {

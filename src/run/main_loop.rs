@@ -9,13 +9,15 @@
 //! knot tracking, due cuts, the control-point history, probes — and observers see
 //! member 0. Cuts due at the start (all of them for a static scene) are made first.
 //!
-//! A [`RunControl`] may stop the loop before a stage (a signal's flag, `max_steps`);
-//! the result is then complete up to there and marked interrupted. With a checkpoint
-//! plan the loop writes the run's state (members, tallies, observers) periodically and
-//! where it stops, and [`resume_scene`] continues such a run from the stage after it
-//! ([`crate::run::checkpoint`]).
+//! A [`RunControl`] may stop the loop before a stage (a signal, `max_steps`), or inside
+//! one (the solvers abandon it; [`crate::run::control`] puts the run back as it stood
+//! before it); the result is then complete up to there and marked interrupted. With a
+//! checkpoint plan the loop writes the run's state (members, tallies, observers)
+//! periodically and where it stops, and [`resume_scene`] continues such a run from the
+//! stage after it ([`crate::run::checkpoint`]).
 
 use crate::run::checkpoint::{Checkpoint, CheckpointPlan, MemberState};
+use crate::run::control::Undo;
 use crate::run::ensemble::summarize;
 use crate::run::observe::Observer;
 use crate::run::runner::{finish, frame, notify_finish, RunControl, RunResult, SolverTotals};
@@ -23,7 +25,7 @@ use crate::run::tally::{CutSchedule, Tally};
 use crate::scene::{Method, Scene};
 use crate::world::saved::SimulationState;
 use crate::{Ensemble, Error, Simulation};
-use splinerod_core::Real;
+use splinerod_core::{Cancel, Real};
 use std::ops::Range;
 use std::time::Instant;
 
@@ -103,7 +105,8 @@ pub(crate) fn run_scene(
     control: &RunControl,
 ) -> Result<RunResult, Error> {
     check_memory(scene, only)?;
-    let run = fresh_run(scene, only)?;
+    let mut run = fresh_run(scene, only, &control.cancel)?;
+    run.set_cancel(&control.cancel);
     let lead = &run.ensemble.members[0];
     for o in observers.iter_mut() {
         o.start(&frame(scene, &lead.system, lead.time, 0))?;
@@ -111,11 +114,28 @@ pub(crate) fn run_scene(
     advance(scene, run, observers, control)
 }
 
-/// The members of `scene` (of `only`) built, prepared and tallied at their start.
-pub(crate) fn fresh_run(scene: &Scene, only: Option<&Range<usize>>) -> Result<Run, Error> {
+impl Run {
+    /// Makes every member's solvers poll `cancel`.
+    pub(crate) fn set_cancel(&mut self, cancel: &Cancel) {
+        for sim in &mut self.ensemble.members {
+            sim.system.cancel = cancel.clone();
+        }
+    }
+}
+
+/// The members of `scene` (of `only`) built, prepared and tallied at their start;
+/// [`Error::Interrupted`] if `cancel` asks to stop meanwhile.
+pub(crate) fn fresh_run(
+    scene: &Scene,
+    only: Option<&Range<usize>>,
+    cancel: &Cancel,
+) -> Result<Run, Error> {
     let mut members = Vec::new();
     let mut sims = Vec::new();
     for (member_scene, mut sim) in build_members(scene, only)? {
+        if cancel.requested() {
+            return Err(Error::Interrupted("while the members were built"));
+        }
         let mut cuts = CutSchedule::new(&member_scene)?;
         prepare(&member_scene, &mut sim, &mut cuts)?;
         let mut tally = Tally::new(&member_scene, &sim.system)?;
@@ -145,7 +165,7 @@ pub(crate) fn checkpoint_cost(
     plan: &CheckpointPlan,
     repeats: usize,
 ) -> Result<(Real, u64), Error> {
-    let mut run = fresh_run(scene, None)?;
+    let mut run = fresh_run(scene, None, &Cancel::none())?;
     let dt = scene.solver.dt.unwrap_or_default();
     for _ in 0..steps {
         stage(scene, &mut run, &mut [], false, dt)?;
@@ -179,6 +199,7 @@ pub(crate) fn resume_scene(
     let states = checkpoint.members.into_iter();
     let states = states.map(|m| (m.simulation, m.tally));
     let mut run = restored_run(scene, only, states, checkpoint.stage)?;
+    run.set_cancel(&control.cancel);
     run.wall_before = checkpoint.wall_seconds;
     let lead = &run.ensemble.members[0];
     let now = frame(scene, &lead.system, lead.time, lead.steps);
@@ -261,18 +282,34 @@ fn advance(
     } else {
         (scene.step_count(), scene.solver.dt.unwrap_or_default())
     };
-    let mut interrupted = false;
+    let (mut interrupted, mut abandoned, mut saved) = (false, false, false);
     let start = Instant::now();
     let mut last_checkpoint = Instant::now();
+    let plan = control.checkpoint.as_ref();
+    let mut undo = Undo::new(&control.cancel);
     while run.stage < stages {
         if control.stops_before(run.stage) {
             interrupted = true;
-            if let Some(plan) = &control.checkpoint {
+            if let Some(plan) = plan {
                 save(plan, &run, observers, start)?;
+                saved = true;
             }
             break;
         }
-        stage(scene, &mut run, observers, statics, dt)?;
+        undo.before(&run);
+        match stage(scene, &mut run, observers, statics, dt) {
+            Ok(()) => {}
+            Err(e) if e.is_interrupted() => {
+                (interrupted, abandoned) = (true, true);
+                let exact = undo.restore(scene, &mut run, &control.cancel)?;
+                if let (Some(plan), true) = (plan, exact) {
+                    save(plan, &run, observers, start)?;
+                    saved = true;
+                }
+                break;
+            }
+            Err(e) => return Err(e),
+        }
         if let Some(plan) = &control.checkpoint {
             if last_checkpoint.elapsed().as_secs_f64() >= plan.every_seconds {
                 save(plan, &run, observers, start)?;
@@ -281,7 +318,12 @@ fn advance(
         }
     }
     let wall = run.wall_before + start.elapsed().as_secs_f64();
-    conclude(scene, run, observers, wall, interrupted)
+    let result = conclude(scene, run, observers, wall, interrupted)?;
+    Ok(RunResult {
+        abandoned_step: abandoned,
+        checkpoint_at_stop: saved,
+        ..result
+    })
 }
 
 /// One stage of every member, recorded, shown to the observers.

@@ -4,6 +4,7 @@
 //! interface outputs (pictures, VTK, statistics) plug into.
 
 pub mod checkpoint;
+pub mod control;
 pub mod ensemble;
 pub(crate) mod knot_track;
 pub(crate) mod main_loop;

@@ -146,39 +146,24 @@ pub struct RunResult {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub adaptivity: Option<EstimateOutput>,
     /// Whether the run stopped before its duration ([`RunControl`]: a signal, a stop
-    /// flag or `--max-steps`); absent from the JSON when it ran to its end.
+    /// request or `--max-steps`); absent from the JSON when it ran to its end.
     #[serde(skip_serializing_if = "is_false")]
     pub interrupted: bool,
+    /// Whether the stop abandoned a step under way, rolled back to the last completed
+    /// step ([`crate::run::control`]); not in the JSON.
+    #[serde(skip)]
+    pub abandoned_step: bool,
+    /// Whether a checkpoint was written where the run stopped (with a checkpoint plan;
+    /// not after an abandoned step that could not be undone exactly); not in the JSON.
+    #[serde(skip)]
+    pub checkpoint_at_stop: bool,
 }
 
 fn is_false(b: &bool) -> bool {
     !*b
 }
 
-/// How a run may end before its duration: after a number of steps, or when a flag is
-/// raised (by a signal handler or another thread). Either way the run stops at the end
-/// of the step under way and its result, observers and outputs are complete, with
-/// [`RunResult::interrupted`] set. The default runs to the end.
-#[derive(Debug, Clone, Default)]
-pub struct RunControl {
-    /// Take at most this many steps (counted from the run's start, also when resumed).
-    pub max_steps: Option<usize>,
-    /// Stop once this is true (checked before each step).
-    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
-    /// Write checkpoints (see [`crate::run::checkpoint`]), and one where the run stops.
-    pub checkpoint: Option<crate::run::checkpoint::CheckpointPlan>,
-}
-
-impl RunControl {
-    /// Whether the run must stop before taking step `step` (0-based).
-    pub fn stops_before(&self, step: usize) -> bool {
-        let raised = self
-            .stop
-            .as_ref()
-            .is_some_and(|f| f.load(std::sync::atomic::Ordering::SeqCst));
-        raised || self.max_steps.is_some_and(|m| step >= m)
-    }
-}
+pub use crate::run::control::RunControl;
 
 /// Runs `scene` to its end.
 pub fn run(scene: &Scene) -> Result<RunResult, Error> {
@@ -212,7 +197,7 @@ pub fn resume(
     control: &RunControl,
 ) -> Result<RunResult, Error> {
     let checkpoint = crate::run::checkpoint::read(dir)?;
-    let scene = Scene::from_toml(&checkpoint.scene)?;
+    let scene = Scene::from_toml_cancellable(&checkpoint.scene, &control.cancel)?;
     let (only, shard) = (checkpoint.only, checkpoint.shard);
     let mut result = crate::run::main_loop::resume_scene(&scene, checkpoint, observers, control)?;
     if let (Some((a, b)), Some((index, count))) = (only, shard) {
@@ -343,6 +328,8 @@ pub(crate) fn finish(
         stage_seconds: tally.stages,
         adaptivity: tally.estimates,
         interrupted: false,
+        abandoned_step: false,
+        checkpoint_at_stop: false,
     })
 }
 

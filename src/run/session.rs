@@ -8,18 +8,23 @@
 //! loop's own, so a scene driven to its end this way reports what `splinerod run`
 //! reports, bit for bit but the wall-clock fields.
 
+use crate::run::control::Undo;
 use crate::run::main_loop::{self, Run};
 use crate::run::runner::RunResult;
 use crate::scene::{Method, Scene};
 use crate::{Error, Simulation};
 use nalgebra::Vector3;
-use splinerod_core::Real;
+use splinerod_core::{Cancel, Real};
 use std::time::Instant;
 
 /// A scene's run under way, advanced by the caller (see the module docs).
 pub struct SceneRun {
     scene: Scene,
     run: Run,
+    /// The stop the stages poll ([`SceneRun::set_cancel`]).
+    cancel: Cancel,
+    /// Copies to undo an abandoned stage of an ensemble ([`crate::run::control`]).
+    undo: Undo,
 }
 
 impl std::fmt::Debug for SceneRun {
@@ -38,8 +43,19 @@ impl SceneRun {
         main_loop::check_memory(scene, None)?;
         Ok(Self {
             scene: scene.clone(),
-            run: main_loop::fresh_run(scene, None)?,
+            run: main_loop::fresh_run(scene, None, &Cancel::none())?,
+            cancel: Cancel::none(),
+            undo: Undo::default(),
         })
+    }
+
+    /// Makes the stages poll `cancel` from now on: [`SceneRun::advance`] stops between
+    /// stages when it asks to, and the solvers abandon a stage under way
+    /// ([`Cancel::abandon`]), which is then undone (see [`crate::run::control`]).
+    pub fn set_cancel(&mut self, cancel: Cancel) {
+        self.run.set_cancel(&cancel);
+        self.undo.follow(&cancel);
+        self.cancel = cancel;
     }
 
     /// The scene being run.
@@ -75,13 +91,26 @@ impl SceneRun {
 
     /// Makes `stages` more stages (time steps of [`SceneRun::dt`], or static solves),
     /// also past the scene's duration. A failing step leaves its member as it was before
-    /// that step and returns the error; the stages made before it stay made.
+    /// that step and returns the error; the stages made before it stay made. A stop
+    /// asked through [`SceneRun::set_cancel`] ends it with an interrupted error
+    /// ([`Error::is_interrupted`]), every member as it was after the last stage made.
     pub fn advance(&mut self, stages: usize) -> Result<(), Error> {
         let (statics, dt) = (self.is_static(), self.dt());
         for _ in 0..stages {
+            if self.cancel.check() {
+                return Err(Error::Interrupted("between steps"));
+            }
             let start = Instant::now();
-            main_loop::stage(&self.scene, &mut self.run, &mut [], statics, dt)?;
+            self.undo.before(&self.run);
+            let made = main_loop::stage(&self.scene, &mut self.run, &mut [], statics, dt);
             self.run.wall_before += start.elapsed().as_secs_f64();
+            if let Err(e) = made {
+                if e.is_interrupted() {
+                    self.undo
+                        .restore(&self.scene, &mut self.run, &self.cancel)?;
+                }
+                return Err(e);
+            }
         }
         Ok(())
     }

@@ -12,6 +12,7 @@ pub(crate) mod closed;
 pub(crate) mod contact;
 pub(crate) mod ensemble;
 pub mod limits;
+mod load;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
 pub(crate) mod pins;
@@ -26,6 +27,7 @@ pub use crate::scene::closed::RingSpec;
 pub use crate::scene::contact::ContactSpec;
 pub use crate::scene::ensemble::EnsembleSpec;
 pub use crate::scene::limits::{Limits, Resources};
+pub(crate) use crate::scene::load::parse_error;
 pub use crate::scene::loads::LoadSpec;
 pub use crate::scene::obstacles::ObstacleSpec;
 pub use crate::scene::pins::{PinSpec, WorldSpec};
@@ -268,40 +270,6 @@ impl Default for OutputSpec {
 }
 
 impl Scene {
-    /// Parses and validates a scene from TOML text.
-    pub fn from_toml(text: &str) -> Result<Self, Error> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
-        if scene.resolve_rods()? {
-            return Ok(scene);
-        }
-        scene.resolve_shape()?;
-        scene.validate()?;
-        Ok(scene)
-    }
-
-    /// Reads, parses and validates a scene file.
-    pub fn load(path: impl AsRef<std::path::Path>) -> Result<Self, Error> {
-        let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Self::from_toml(&text).map_err(|e| match e {
-            Error::Parse {
-                position,
-                message,
-                field,
-                ..
-            } => Error::Parse {
-                file: Some(path.display().to_string()),
-                position,
-                message,
-                field,
-            },
-            other => other,
-        })
-    }
-
     /// Range checks of every value; the error names the field.
     pub fn validate(&self) -> Result<(), Error> {
         let r = &self.rod;
@@ -450,51 +418,5 @@ impl Scene {
             finite_vec("rod.end", e)?;
         }
         self.validate_start_length()
-    }
-}
-
-/// One line from a TOML error: `line L, column C: message`, with a missing or unknown field
-/// named by its dotted path (`rod.rest_length`) and any other error followed by its path.
-pub(crate) fn parse_error(text: &str, e: &toml::de::Error) -> Error {
-    // Without the input, the error's Display ends with "in `a.b`" naming the enclosing keys.
-    let mut bare = e.clone();
-    bare.set_input(None);
-    let bare = bare.to_string();
-    let path = bare
-        .lines()
-        .last()
-        .and_then(|l| l.strip_prefix("in `")?.strip_suffix('`'))
-        .unwrap_or("");
-    let mut message = e.message().trim_end().to_string();
-    let named = ["missing field `", "unknown field `"]
-        .iter()
-        .find(|p| message.starts_with(**p));
-    match named {
-        Some(p) if !path.is_empty() => message.insert_str(p.len(), &format!("{path}.")),
-        _ if !path.is_empty() => message.push_str(&format!(" in `{path}`")),
-        _ => {}
-    }
-    let field = match named {
-        Some(p) => message[p.len()..].split('`').next().map(str::to_string),
-        None => Some(path.to_string()).filter(|p| !p.is_empty()),
-    };
-    match e.span() {
-        Some(span) => {
-            let before = text.get(..span.start).unwrap_or(text);
-            let line = before.matches('\n').count() + 1;
-            let column = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
-            Error::Parse {
-                file: None,
-                position: Some((line, column)),
-                message,
-                field,
-            }
-        }
-        None => Error::Parse {
-            file: None,
-            position: None,
-            message,
-            field,
-        },
     }
 }

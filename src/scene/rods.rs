@@ -16,7 +16,7 @@
 
 use crate::scene::{RodSpec, Scene};
 use crate::{Error, PinDriver, RodSystem};
-use splinerod_core::{Pin, Real, Rod};
+use splinerod_core::{Cancel, Pin, Real, Rod};
 use splinerod_energies::OnSegment;
 
 /// Where the entries of one rod's scene come from in the file.
@@ -151,7 +151,7 @@ impl Scene {
     /// For a scene with `[[rods]]`: resolves and validates every rod as its one-rod scene
     /// (errors renamed to the file's paths) and the rods together; `Ok(false)` for a
     /// one-rod scene, which the caller resolves as before.
-    pub(crate) fn resolve_rods(&mut self) -> Result<bool, Error> {
+    pub(crate) fn resolve_rods(&mut self, cancel: &Cancel) -> Result<bool, Error> {
         if self.rods.is_empty() {
             if self.rod.absent {
                 return Err(Error::MissingField {
@@ -173,7 +173,7 @@ impl Scene {
         for k in 0..self.rods.len() {
             let (mut sub, origins) = self.rod_scene(k)?;
             let rename = |e| renamed(e, k, &origins);
-            sub.resolve_shape().map_err(rename)?;
+            sub.resolve_shape_with(cancel).map_err(rename)?;
             sub.validate().map_err(|e| renamed(e, k, &origins))?;
             self.rods[k] = sub.rod;
         }

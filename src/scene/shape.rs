@@ -5,6 +5,7 @@
 use crate::scene::{KnotsSpec, Scene};
 use crate::Error;
 use serde::Deserialize;
+use splinerod_core::Cancel;
 
 /// `rod.rest_shape`.
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
@@ -59,6 +60,11 @@ impl Scene {
     /// Sets `rod.rest_length` from the file, or it and `rod.initial_control_points` from
     /// `rod.overhand`; errors if the scene gives both, or neither.
     pub fn resolve_shape(&mut self) -> Result<(), Error> {
+        self.resolve_shape_with(&Cancel::none())
+    }
+
+    /// [`Scene::resolve_shape`], polling `cancel` during the knot's fit.
+    pub(crate) fn resolve_shape_with(&mut self, cancel: &Cancel) -> Result<(), Error> {
         let r = &mut self.rod;
         let Some(shape) = r.overhand else {
             let Some(length) = r.given_rest_length else {
@@ -95,7 +101,7 @@ impl Scene {
             control_points: r.control_points,
             degree: r.degree,
         };
-        let knot = crate::knot::overhand_knot(&spec).map_err(|e| match e {
+        let knot = crate::knot::overhand_knot_cancellable(&spec, cancel).map_err(|e| match e {
             Error::InvalidField {
                 field,
                 value,

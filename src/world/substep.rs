@@ -3,8 +3,10 @@
 //!
 //! A sub-step whose Newton solve fails — stops at the iteration limit, diverges, meets
 //! a non-finite value or an indefinite matrix — is rolled back by the integrator and
-//! retried at half the length, recursively down to [`StepControl::min_dt`]; below it
-//! the whole step fails and the state is restored. After a success the length doubles
+//! retried at half the length (but not below [`StepControl::min_dt`]); when a sub-step
+//! of `min_dt` fails the whole step fails and the state is restored. No sub-step is
+//! ever shorter than `min_dt` (but the rest of a step that is: the last piece of a
+//! step is at least half the length tried). After a success the length doubles
 //! again, but not back to a length that just failed until [`RECOVERY_STEPS`] sub-steps
 //! in a row succeeded (so that a step length on the edge does not fail every other
 //! time). The next call starts from the length the last one reached.
@@ -17,8 +19,15 @@
 //! (the gap between its end point and the trapezoidal one; the control-point bound holds
 //! for every material point, the basis being a partition of unity), is compared with τ:
 //! `e > τ` rejects the sub-step, and the next length is \\(h \min(2, \max(0.2,
-//! 0.9\sqrt{\tau / e}))\\) (the error is \\(O(h^2)\\) per step). For the second-order
-//! schemes it overestimates the local error, so τ is then a conservative bound.
+//! 0.9\sqrt{\tau / e}))\\) (the error is \\(O(h^2)\\) per step), never below `min_dt`;
+//! a sub-step of `min_dt` with `e > τ` fails the step ([`Error::MinDtReached`], naming
+//! `solver.min_dt`: a tolerance too tight for the shortest step allowed). For the
+//! second-order schemes it overestimates the local error, so τ is then a conservative
+//! bound.
+//!
+//! **Interruption.** Every sub-step first polls the system's [`splinerod_core::Cancel`]
+//! (as Newton does every iteration): an abandoned step returns
+//! [`IntegratorError::Interrupted`] and the caller restores the state.
 //!
 //! **Energy guard.** A scheme that conserves energy ([`Integrator::conserves_energy`]:
 //! the implicit midpoint rule) is not unconditionally stable for nonlinear elasticity:
@@ -122,6 +131,12 @@ fn retryable(e: &Error) -> bool {
     matches!(e, Error::Integrator(e) if e.is_recoverable())
 }
 
+/// The length to retry a sub-step of `length` with: `factor · length`, but not below
+/// `min_dt`; `None` when `length` is `min_dt` already (to round-off) or shorter.
+fn shorter(length: Real, factor: Real, min_dt: Real) -> Option<Real> {
+    (length > min_dt * (1.0 + 1e-9)).then(|| (factor * length).max(min_dt))
+}
+
 impl Simulation {
     /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
     /// may hold an intermediate state: the caller restores it.
@@ -137,7 +152,7 @@ impl Simulation {
             return Ok((stats, counts));
         }
         let min_dt = self.control.min_dt.unwrap_or(dt * DEFAULT_MIN_DT_FRACTION);
-        let mut h = self.substep.next.unwrap_or(dt).min(dt);
+        let mut h = self.substep.next.unwrap_or(dt).max(min_dt).min(dt);
         let mut total = StepStats {
             converged: true,
             ..StepStats::default()
@@ -148,6 +163,9 @@ impl Simulation {
         };
         let mut done = 0.0;
         while done < dt {
+            if self.system.cancel.abandon() {
+                return Err(IntegratorError::Interrupted.into());
+            }
             let rest = dt - done;
             // The rest in one piece if it fits, in two equal ones if it is under 2h (no
             // sliver of a step at the end); never longer than h.
@@ -167,18 +185,23 @@ impl Simulation {
                 Ok((stats, error_ratio)) => {
                     total.add_counts(&stats);
                     total.converged &= stats.converged;
-                    if error_ratio > 1.0 && 0.5 * length >= min_dt {
+                    if error_ratio > 1.0 {
+                        let factor = (0.9 / error_ratio.sqrt()).max(0.2);
+                        let Some(shorter) = shorter(length, factor, min_dt) else {
+                            self.reject_for_time_error();
+                            return Err(self.time_error_at_min_dt(min_dt, error_ratio));
+                        };
                         self.reject_for_time_error();
                         counts.rejected += 1;
-                        h = length * (0.9 / error_ratio.sqrt()).max(0.2);
+                        h = shorter;
                         continue;
                     }
                     done = if length == rest { dt } else { done + length };
                     counts.substeps += 1;
                     counts.smallest_dt = counts.smallest_dt.min(length);
-                    h = self.grow(length, error_ratio).min(dt);
+                    h = self.grow(length, error_ratio).max(min_dt).min(dt);
                 }
-                Err(e) if retryable(&e) && 0.5 * length >= min_dt => {
+                Err(e) if retryable(&e) && shorter(length, 0.5, min_dt).is_some() => {
                     if let Error::Integrator(IntegratorError::NotConverged { iterations, .. }) = e {
                         total.newton_iterations += iterations;
                     }
@@ -186,7 +209,7 @@ impl Simulation {
                     counts.rejected += 1;
                     self.substep.ceiling = Some(length);
                     self.substep.streak = 0;
-                    h = 0.5 * length;
+                    h = shorter(length, 0.5, min_dt).unwrap_or(min_dt);
                 }
                 Err(e) => return Err(e),
             }
@@ -313,6 +336,24 @@ impl Simulation {
             .zip(displacement)
             .map(|(f, d)| f.dot(&d))
             .sum()
+    }
+
+    /// The error of a step whose sub-step of `min_dt` still has a time error of
+    /// `ratio` times the tolerance (or failed the energy guard).
+    fn time_error_at_min_dt(&self, min_dt: Real, ratio: Real) -> Error {
+        let tau = self.control.time_tolerance.unwrap_or(Real::INFINITY);
+        let reason = if ratio > 1.0 && tau.is_finite() {
+            format!(
+                "its time error is {ratio:.3e} times `solver.time_tolerance` = {tau:e} m; raise solver.time_tolerance or lower solver.min_dt"
+            )
+        } else {
+            "it still gains energy (the implicit midpoint rule's guard); lower solver.min_dt or use a dissipative method".to_string()
+        };
+        Error::MinDtReached {
+            time: self.time,
+            min_dt,
+            reason,
+        }
     }
 
     /// Total and kinetic energy of the system now, J.

@@ -34,7 +34,7 @@ pub struct PinDriver {
     pub path: Path,
 }
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
+use splinerod_core::{BlockBanded, Cancel, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
 use splinerod_energies::{Energy, EnergySummary, PointForce};
 use splinerod_integrators::System;
 
@@ -61,6 +61,9 @@ pub struct RodSystem {
     /// The first energy found returning a non-finite value or gradient since the last
     /// [`RodSystem::take_non_finite_energy`] (`what`, name).
     non_finite: std::sync::Mutex<Option<(&'static str, String)>>,
+    /// A stop asked from outside (a signal): the solvers poll it
+    /// ([`System::interrupted`]) and abandon the step under way. Default: none.
+    pub cancel: Cancel,
 }
 
 impl RodSystem {
@@ -77,6 +80,7 @@ impl RodSystem {
             drivers: Vec::new(),
             loads: Vec::new(),
             non_finite: std::sync::Mutex::new(None),
+            cancel: Cancel::none(),
         }
     }
 
@@ -400,6 +404,9 @@ impl System for RodSystem {
     }
     fn update_multipliers(&mut self, stiffen: bool) -> Real {
         RodSystem::update_multipliers(self, stiffen)
+    }
+    fn interrupted(&self) -> bool {
+        self.cancel.abandon()
     }
     fn set_stiffness_scale(&mut self, scale: Real) -> bool {
         let mut any = false;
