@@ -151,7 +151,8 @@ impl Simulation {
 
     /// Makes `n` time steps (a static simulation: `n` equilibrium solves), every member
     /// of an ensemble. A failing step raises `SplinerodError`; its member keeps the state
-    /// before that step.
+    /// before that step. Ctrl-C raises `KeyboardInterrupt` within about a second, every
+    /// member left as after the last completed step.
     #[pyo3(signature = (n = 1))]
     fn step(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
         self.advance(py, n)

@@ -23,7 +23,7 @@ pub struct SceneRun {
     run: Run,
     /// The stop the stages poll ([`SceneRun::set_cancel`]).
     cancel: Cancel,
-    /// Copies to undo an abandoned stage of an ensemble ([`crate::run::control`]).
+    /// Copies to undo an abandoned stage ([`crate::run::control`]).
     undo: Undo,
 }
 

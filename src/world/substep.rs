@@ -4,12 +4,13 @@
 //! A sub-step whose Newton solve fails — stops at the iteration limit, diverges, meets
 //! a non-finite value or an indefinite matrix — is rolled back by the integrator and
 //! retried at half the length (but not below [`StepControl::min_dt`]); when a sub-step
-//! of `min_dt` fails the whole step fails and the state is restored. No sub-step is
-//! ever shorter than `min_dt` (but the rest of a step that is: the last piece of a
-//! step is at least half the length tried). After a success the length doubles
-//! again, but not back to a length that just failed until [`RECOVERY_STEPS`] sub-steps
-//! in a row succeeded (so that a step length on the edge does not fail every other
-//! time). The next call starts from the length the last one reached.
+//! of `min_dt` fails the whole step fails and the state is restored. The length tried
+//! never goes below `min_dt`; only a rest of the step under twice that length is cut
+//! into two equal pieces (no sliver at the end), each at least half of it. After a
+//! success the length doubles again, but not back to a length that just failed until
+//! [`RECOVERY_STEPS`] sub-steps in a row succeeded (so that a step length on the edge
+//! does not fail every other time). The next call starts from the length the last one
+//! reached.
 //!
 //! **Time error control** (optional, [`StepControl::time_tolerance`] = τ, metres): after
 //! each sub-step of length `h` the local error of implicit Euler,
@@ -21,7 +22,8 @@
 //! `e > τ` rejects the sub-step, and the next length is \\(h \min(2, \max(0.2,
 //! 0.9\sqrt{\tau / e}))\\) (the error is \\(O(h^2)\\) per step), never below `min_dt`;
 //! a sub-step of `min_dt` with `e > τ` fails the step ([`Error::MinDtReached`], naming
-//! `solver.min_dt`: a tolerance too tight for the shortest step allowed). For the
+//! `solver.min_dt`: a tolerance too tight for the shortest step allowed), as does one
+//! that fails the energy guard below. For the
 //! second-order schemes it overestimates the local error, so τ is then a conservative
 //! bound.
 //!
