@@ -4,7 +4,8 @@
 //! under `tests/snapshots/`, so a behaviour change shows up in review without timing
 //! noise. After an intended change, regenerate them with
 //! `SPLINEROD_UPDATE_SNAPSHOTS=1 cargo test --release --test snapshots` and commit the
-//! diff.
+//! diff. Every run is also checked for hinges (`RunResult::hinge_steps`, #46): no
+//! bundled scene may leave a corner on a rod with bending or twist, at any step.
 //!
 //! Counts and real numbers must agree within 2 % (counts below 50 exactly): round-off
 //! differs between kernel sets (`SPLINEROD_KERNELS`, `splinerod_core::kernels`: the
@@ -127,6 +128,14 @@ fn every_bundled_scene_matches_its_snapshot() {
     for path in &paths {
         let scene = Scene::load(path).expect("bundled scene loads");
         let result = run(&scene).expect("bundled scene runs");
+        // #46: no bundled scene ever holds a hinge (a corner on a rod with bending).
+        if result.hinge_steps > 0 {
+            problems.push(format!(
+                "{}: {} steps with a hinge",
+                path.display(),
+                result.hinge_steps
+            ));
+        }
         let new = snapshot(&result);
         let (main, own) = snapshot_paths(path);
         let old = read_snapshot(&main);

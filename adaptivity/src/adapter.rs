@@ -1,5 +1,7 @@
 //! The adapt step run after each integration step (paper §4.1, ADAPTATION()): insert
-//! while some criterion marks an insertion, then remove what is marked for removal.
+//! while some criterion marks an insertion, then remove what is marked for removal, then
+//! (when removals made room under `max_control_points`) insert once more: a criterion
+//! at the budget trades resolution this way.
 //!
 //! Guards, all in [`AdaptParams`]: at most `max_control_points`; no span shorter than
 //! `min_span` (m); removals only while together they move the curve by at most
@@ -10,7 +12,7 @@
 //! energies with per-coefficient caches can follow (`Energy::on_knot_change`) without
 //! this crate knowing about them.
 
-use crate::{AdaptError, ErrorEstimate, Refinement, RefinementCriterion};
+use crate::{AdaptError, Continuity, ErrorEstimate, Refinement, RefinementCriterion};
 use splinerod_core::{KnotMap, Real, Rod};
 
 /// Limits of the adapt step.
@@ -93,6 +95,9 @@ pub struct Adapter {
     pub params: AdaptParams,
     /// The criteria consulted, in order.
     pub criteria: Vec<Box<dyn RefinementCriterion>>,
+    /// Where insertions may repeat a knot up to the degree (a corner); elsewhere at most
+    /// `d − 1` ([`Continuity`]; default: corners nowhere).
+    pub continuity: Continuity,
     /// Recently inserted knot values and the adapt steps they stay protected.
     protected: Vec<(Real, usize)>,
     marks: Vec<Refinement>,
@@ -106,6 +111,7 @@ impl std::fmt::Debug for Adapter {
         f.debug_struct("Adapter")
             .field("params", &self.params)
             .field("criteria", &names)
+            .field("continuity", &self.continuity)
             .field("protected", &self.protected)
             .finish()
     }
@@ -130,10 +136,17 @@ impl Adapter {
         Ok(Self {
             params,
             criteria: Vec::new(),
+            continuity: Continuity::default(),
             protected: Vec::new(),
             marks: Vec::new(),
             removals: Vec::new(),
         })
+    }
+
+    /// The same adapter keeping `continuity` (builder style).
+    pub fn with_continuity(mut self, continuity: Continuity) -> Self {
+        self.continuity = continuity;
+        self
     }
 
     /// Adds a criterion.
@@ -172,6 +185,10 @@ impl Adapter {
             }
         }
         report.removed = self.remove_round(rod, interactions, on_change)?;
+        if report.removed > 0 && rod.len() < self.params.max_control_points {
+            // Removals at the budget made room for insertions it had blocked.
+            report.inserted += self.insert_round(rod, interactions, on_change)?;
+        }
         Ok(report)
     }
 
@@ -238,11 +255,13 @@ impl Adapter {
     }
 
     /// Whether inserting `at` leaves both halves of its span at least `min_span` long
-    /// (repeating an existing knot makes no new span and is allowed below multiplicity
-    /// `d`: a criterion never makes the curve discontinuous, which at `d + 1` — the
-    /// junction of two rods of `[[rods]]`, a cut — it already is).
+    /// (repeating an existing knot makes no new span and is allowed below the
+    /// multiplicity [`Continuity`] allows there: `d` (a corner) on strings, `d − 1`
+    /// where bending or twist acts; a criterion never makes the curve discontinuous,
+    /// which at `d + 1` — the junction of two rods of `[[rods]]`, a cut — it already is).
     fn room_for(&self, rod: &Rod, at: Real) -> bool {
-        if rod.knot_multiplicity(at) >= rod.basis().degree() {
+        let most = self.continuity.max_multiplicity(rod.basis().degree(), at);
+        if rod.knot_multiplicity(at) >= most {
             return false;
         }
         let knots = rod.basis().knots();

@@ -3,7 +3,8 @@
 //!
 //! **Method: hierarchical, by one Newton step on a finer copy.** A scratch copy of the
 //! rod is refined at once ([`Rod::refined`], exact) by a knot at every span's midpoint
-//! and one more knot at every interaction point whose multiplicity is below the degree.
+//! and one more knot at every interaction point whose multiplicity is below what
+//! [`Continuity`] allows there (the degree on strings, `d − 1` where bending acts).
 //! The copy has the same curve; on it the mechanics ([`FineProblem`]) gives the residual
 //! `r̂` of the step's equilibrium (forces, inertia and damping of the step included) and
 //! the stiffness `K̂`.
@@ -36,7 +37,7 @@
 //! estimate is the spatial error of the equilibrium the step solved with its
 //! acceleration as a load (elliptic reconstruction).
 
-use crate::AdaptError;
+use crate::{AdaptError, Continuity};
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::basis::{greville, spans};
 use splinerod_core::{BasisValues, BlockBanded, Real, RefinementOperator, Rod};
@@ -131,6 +132,24 @@ impl ErrorEstimate {
         self.global
     }
 
+    /// How uneven the estimate is over the spans: the largest span estimate over the
+    /// median one (1 when it is uniform; `NaN` without spans or with a zero median).
+    /// Allocates a copy of the span estimates.
+    pub fn spread(&self) -> Real {
+        let mut errors: Vec<Real> = self.spans.iter().map(|s| s.error).collect();
+        if errors.is_empty() {
+            return Real::NAN;
+        }
+        let middle = errors.len() / 2;
+        let (_, &mut median, _) = errors.select_nth_unstable_by(middle, Real::total_cmp);
+        let largest = errors.iter().copied().fold(0.0, Real::max);
+        if median > 0.0 {
+            largest / median
+        } else {
+            Real::NAN
+        }
+    }
+
     /// The largest estimate of the spans overlapping `[a, b]` (touching counts).
     pub fn on(&self, a: Real, b: Real) -> Real {
         let from = self.spans.partition_point(|e| e.end < a);
@@ -156,6 +175,9 @@ pub struct Estimator {
     stiffness: BlockBanded,
     /// The latest estimate.
     pub estimate: ErrorEstimate,
+    /// Where an interaction point may take knots up to the degree (a corner); elsewhere
+    /// the finer copy repeats a knot only up to `d − 1`, as the adapter would.
+    pub continuity: Continuity,
 }
 
 impl Estimator {
@@ -290,7 +312,8 @@ impl Estimator {
         self.values.clear();
         self.values
             .extend(spans(basis).map(|s| 0.5 * (s.start + s.end)));
-        let room = |s: Real| rod.knot_multiplicity(s) < basis.degree();
+        let most = |s: Real| self.continuity.max_multiplicity(basis.degree(), s);
+        let room = |s: Real| rod.knot_multiplicity(s) < most(s);
         self.values.extend(
             interactions
                 .iter()

@@ -12,7 +12,8 @@
 //!   ([`Estimator`], hierarchical; the mechanics come in through [`FineProblem`]);
 //! * [`CurvatureCriterion`] (eq. 13 on the control polygon) and [`InteractionCriterion`]
 //!   (knots where the rod is grabbed or touched);
-//! * [`Adapter`] — the adapt step with its limits and hysteresis ([`AdaptParams`]).
+//! * [`Adapter`] — the adapt step with its limits and hysteresis ([`AdaptParams`]) and
+//!   the continuity it keeps ([`Continuity`]: corners only where nothing resists bending).
 //!
 //! ```
 //! use splinerod_adaptivity::{Refinement, RefinementCriterion};
@@ -39,6 +40,7 @@
 #![warn(missing_docs)]
 
 mod adapter;
+pub mod continuity;
 pub mod curvature;
 mod error;
 pub mod estimate;
@@ -46,6 +48,7 @@ mod interaction;
 mod tolerance;
 
 pub use adapter::{AdaptParams, AdaptReport, Adapter};
+pub use continuity::Continuity;
 pub use curvature::CurvatureCriterion;
 pub use error::AdaptError;
 pub use estimate::{ErrorEstimate, Estimator, FineProblem};

@@ -2,8 +2,10 @@
 
 use nalgebra::Vector3;
 use splinerod_adaptivity::curvature::disturbance;
+use splinerod_adaptivity::estimate::SpanError;
 use splinerod_adaptivity::{
-    AdaptParams, Adapter, CurvatureCriterion, InteractionCriterion, Refinement, RefinementCriterion,
+    AdaptParams, Adapter, Continuity, CurvatureCriterion, ErrorEstimate, InteractionCriterion,
+    Refinement, RefinementCriterion, ToleranceCriterion,
 };
 use splinerod_core::{BSplineSpace, Material, Real, Rod};
 
@@ -152,4 +154,95 @@ fn interaction_criterion_inserts_once_and_protects_its_knot() {
         assert_eq!(rod.knot_multiplicity(0.3), 1, "the grabbed knot must stay");
     }
     assert!(InteractionCriterion::new(0.0).is_err());
+}
+
+/// #46: an interaction asking for a corner (multiplicity 3 on a cubic) gets one only
+/// where [`Continuity`] allows corners (a string); elsewhere the knot stops at 2 (C¹).
+#[test]
+fn corners_only_where_the_continuity_allows_them() {
+    for (continuity, most) in [
+        (Continuity::default(), 2),
+        (Continuity::corners_everywhere(1.0), 3),
+        (
+            Continuity {
+                corners_allowed: vec![(0.5, 1.0)],
+            },
+            2,
+        ),
+    ] {
+        let mut rod = arc(8, 1e-9);
+        let c = InteractionCriterion::new(0.01)
+            .unwrap()
+            .with_multiplicity(3)
+            .unwrap();
+        let mut adapter = Adapter::new(AdaptParams::default())
+            .unwrap()
+            .with(c)
+            .with_continuity(continuity.clone());
+        for _ in 0..3 {
+            adapter
+                .adapt(&mut rod, &[0.3], None, &mut |_, _| {})
+                .unwrap();
+        }
+        assert_eq!(rod.knot_multiplicity(0.3), most, "{continuity:?}");
+        assert_eq!(continuity.hinges(&rod), 0);
+    }
+}
+
+/// An estimate of `rod` with `errors` per span (midpoints alike), the largest as the
+/// global estimate.
+fn estimate_of(rod: &Rod, errors: &[Real]) -> ErrorEstimate {
+    let knots = rod.basis().knots();
+    let mut values: Vec<Real> = knots.to_vec();
+    values.dedup();
+    let spans: Vec<SpanError> = values
+        .windows(2)
+        .zip(errors)
+        .map(|(w, &error)| SpanError {
+            start: w[0],
+            end: w[1],
+            error,
+            midpoint: error,
+        })
+        .collect();
+    ErrorEstimate {
+        global: errors.iter().copied().fold(0.0, Real::max),
+        control_points: rod.len(),
+        spans,
+        corners: Vec::new(),
+    }
+}
+
+/// #46: at `max_control_points` the tolerance criterion trades: the span far above
+/// the tolerance is split and the cheapest knot elsewhere goes, keeping the count; below
+/// the budget the same estimate only refines, and spans far below the tolerance are
+/// coarsened whatever the rest of the rod does.
+#[test]
+fn the_tolerance_criterion_trades_resolution_at_its_budget() {
+    let mut errors = vec![1e-9; 9];
+    errors[6] = 1e-2;
+    for budget in [12, 40] {
+        let mut rod = arc(12, 1e-9);
+        let criterion = ToleranceCriterion::new(1e-4).unwrap().with_budget(budget);
+        let params = AdaptParams {
+            max_control_points: budget,
+            hysteresis_steps: 0,
+            ..AdaptParams::default()
+        };
+        let mut adapter = Adapter::new(params).unwrap().with(criterion);
+        let estimate = estimate_of(&rod, &errors);
+        let (a, b) = (estimate.spans[6].start, estimate.spans[6].end);
+        let report = adapter
+            .adapt(&mut rod, &[], Some(&estimate), &mut |_, _| {})
+            .unwrap();
+        assert_eq!(
+            rod.knot_multiplicity(0.5 * (a + b)),
+            1,
+            "the worst span is split"
+        );
+        assert!(report.removed >= 1, "{report:?}");
+        if budget == 12 {
+            assert_eq!(rod.len(), 12, "a trade keeps the count: {report:?}");
+        }
+    }
 }

@@ -40,8 +40,9 @@ use std::path::{Path, PathBuf};
 /// solver totals count the remainder's conjugate-gradient iterations; 3: the velocities
 /// at the start of the last step, so that a run resumed at its end reports the same
 /// final error estimate; 4: the checksum over the file and the scene text's hash, the
-/// kernel set, and the solver totals' steps solved alone per reason).
-pub const VERSION: u32 = 4;
+/// kernel set, and the solver totals' steps solved alone per reason; 5: the count of
+/// steps with a hinge and the estimate's spread).
+pub const VERSION: u32 = 5;
 /// The first format version with a checksum; older files are refused as such.
 const FIRST_CHECKSUMMED: u32 = 4;
 /// Bytes of the checksum at the end of the file.

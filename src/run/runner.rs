@@ -126,6 +126,10 @@ pub struct RunResult {
     pub shard: Option<ShardInfo>,
     /// `[t, n]`: the initial number of control points and every change of it.
     pub control_points_history: Vec<[Real; 2]>,
+    /// Recorded states (steps) that ended with a hinge: a knot of multiplicity `d` (a
+    /// corner) on a rod with bending or twist. Adaptivity never makes one (its corners
+    /// are for strings); only a knot inserted by hand can.
+    pub hinge_steps: usize,
     /// Median wall time of one step (integration and adaptivity), s; 0 for a static solve.
     /// For an ensemble: of one step of the whole ensemble.
     pub median_step_seconds: Real,
@@ -321,6 +325,7 @@ pub(crate) fn finish(
             .collect(),
         shard: None,
         control_points_history: tally.history,
+        hinge_steps: tally.hinge_steps,
         median_step_seconds: if statics { 0.0 } else { median(step_seconds) },
         ensemble: Vec::new(),
         contact: tally.contact,

@@ -8,6 +8,7 @@ use crate::run::runner::{probes_at_start, ContactStats, Probe, SolverTotals};
 use crate::scene::Scene;
 use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
+use splinerod_adaptivity::Continuity;
 use splinerod_core::Real;
 use splinerod_energies::EnergySummary;
 use std::time::Instant;
@@ -24,6 +25,12 @@ pub(crate) struct Tally {
     /// Wall time of each stage, summed over the run.
     pub(crate) stages: StageTimes,
     pub(crate) cuts: CutSchedule,
+    /// Recorded states with a hinge ([`Continuity::hinges`]): a corner on a rod with
+    /// bending or twist. Zero unless a knot was inserted by hand.
+    pub(crate) hinge_steps: usize,
+    /// Where the scene allows corners (built at the first record; not saved).
+    #[serde(skip)]
+    continuity: Option<Continuity>,
 }
 
 impl Tally {
@@ -38,6 +45,8 @@ impl Tally {
             estimates: None,
             stages: StageTimes::default(),
             cuts: CutSchedule::new(scene)?,
+            hinge_steps: 0,
+            continuity: None,
         };
         tally.summary(&system.summary()?);
         if scene.rod.overhand.is_some() {
@@ -67,10 +76,10 @@ impl Tally {
         let start = Instant::now();
         self.solver.add(report, dt > 0.0);
         self.summary(&report.energies);
-        if let (Some(error), Some(e)) = (report.error_estimate, sim.error_estimate()) {
+        if let (Some(_), Some(e)) = (report.error_estimate, sim.error_estimate()) {
             let changed = report.adapt.inserted + report.adapt.removed > 0;
             let out = self.estimates.get_or_insert_default();
-            out.record(sim.time, e.control_points, error, changed);
+            out.record(sim.time, e, changed);
         }
         if let Some(track) = &mut self.knot {
             track.record(&sim.system, sim.time, false)?;
@@ -78,16 +87,20 @@ impl Tally {
         let time = sim.time;
         self.cuts.apply(time, dt, |s| sim.cut(s))?;
         self.count(sim.time, sim.system.rod.distinct_len());
+        let continuity = self.continuity.get_or_insert_with(|| scene.continuity());
+        if continuity.hinges(&sim.system.rod) > 0 {
+            self.hinge_steps += 1;
+        }
         self.probe(scene, &sim.system, sim.time)?;
         Ok(start.elapsed().as_secs_f64())
     }
 
     /// The final estimate and knot record of a member at the end of its run.
     pub(crate) fn close(&mut self, sim: &mut Simulation) -> Result<(), Error> {
+        let time = sim.time;
         if let Some(e) = sim.estimate_now()? {
-            let (n, error) = (e.control_points, e.max());
             let out = self.estimates.get_or_insert_default();
-            out.record(sim.time, n, error, true);
+            out.record(time, e, true);
         }
         if let Some(track) = &mut self.knot {
             track.record(&sim.system, sim.time, true)?;

@@ -112,7 +112,7 @@ impl AdaptivitySpec {
             let (insert, remove) = self.thresholds();
             adapter.with(CurvatureCriterion::new(insert, remove)?)
         } else {
-            adapter.with(ToleranceCriterion::new(tolerance)?)
+            adapter.with(ToleranceCriterion::new(tolerance)?.with_budget(self.max_control_points))
         })
     }
 

@@ -5,7 +5,7 @@ use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
 use crate::world::path::Path;
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
-use splinerod_adaptivity::Adapter;
+use splinerod_adaptivity::{Adapter, Continuity};
 use splinerod_core::{BSplineSpace, BasisSpace, Keyframes, Material, Pin, Real, Rod};
 use splinerod_energies::{
     Bending, Clamp, Frame, Gravity, StretchFormulation, Stretching, Twisting,
@@ -259,7 +259,24 @@ impl Scene {
             return Ok(None);
         };
         let initial = self.total_control_points();
-        a.adapter(self.rod.rest_length, initial).map(Some)
+        let adapter = a.adapter(self.rod.rest_length, initial)?;
+        Ok(Some(adapter.with_continuity(self.continuity())))
+    }
+
+    /// Where adaptivity may make corners: the rods (segments) with neither bending nor
+    /// twist stiffness ([`Continuity`]; on the others knots stop at multiplicity `d − 1`).
+    pub fn continuity(&self) -> Continuity {
+        let mut start = 0.0;
+        let mut corners_allowed = Vec::new();
+        for k in 0..self.rod_count() {
+            let spec = self.rod_spec(k);
+            let end = start + spec.rest_length;
+            if spec.bending_stiffness.is_none() && spec.twist_stiffness.is_none() {
+                corners_allowed.push((start, end));
+            }
+            start = end;
+        }
+        Continuity { corners_allowed }
     }
 
     /// Newton settings of `[solver]` for time stepping.

@@ -19,7 +19,7 @@ use crate::{Error, RodSystem};
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 use splinerod_adaptivity::estimate::{Corner, SpanError};
-use splinerod_adaptivity::{AdaptError, ErrorEstimate, Estimator, FineProblem};
+use splinerod_adaptivity::{AdaptError, Continuity, ErrorEstimate, Estimator, FineProblem};
 use splinerod_core::{
     BlockBanded, CoreError, HessianKind, Real, RefinementOperator, Rod, SavedState,
 };
@@ -193,6 +193,12 @@ impl ErrorEstimation {
         input.vectors_into(&mut self.acceleration)?;
         input.finish()?;
         Ok(())
+    }
+
+    /// Where the finer copy may repeat an interaction point's knot up to the degree: as
+    /// the adapter may ([`Continuity`]).
+    pub fn set_continuity(&mut self, continuity: &Continuity) {
+        self.estimator.continuity.clone_from(continuity);
     }
 
     /// The latest estimate.
@@ -401,23 +407,28 @@ const HISTORY_INTERVAL: Real = 0.05;
 pub struct EstimateOutput {
     /// The last estimate (after the last step), m.
     pub estimated_error: Real,
-    /// `[t, control points, estimated error]` after every step that changed the
-    /// resolution and at least every 0.05 s (of the estimates made: while the rod is
-    /// steady they are up to 64 steps apart); the count is that of the rod estimated
-    /// (the step's, before its adapt stage).
-    pub history: Vec<[Real; 3]>,
+    /// How uneven the last estimate is: its largest span estimate over the median one
+    /// ([`ErrorEstimate::spread`]; `null` in JSON when undefined).
+    pub estimated_spread: Option<Real>,
+    /// `[t, control points, estimated error, spread]` after every step that changed
+    /// the resolution and at least every 0.05 s (of the estimates made: while the rod
+    /// is steady they are up to 64 steps apart); the count is that of the rod estimated
+    /// (the step's, before its adapt stage); the spread is
+    /// [`ErrorEstimate::spread`] (`NaN`, JSON `null`, when undefined).
+    pub history: Vec<[Real; 4]>,
 }
 
 impl EstimateOutput {
-    /// Records an estimate `error` (m) made at time `t` on `control_points`; `changed`:
-    /// the step changed the resolution.
-    pub fn record(&mut self, t: Real, control_points: usize, error: Real, changed: bool) {
+    /// Records `estimate` made at time `t`; `changed`: the step changed the resolution.
+    pub fn record(&mut self, t: Real, estimate: &ErrorEstimate, changed: bool) {
+        let (n, error, spread) = (estimate.control_points, estimate.max(), estimate.spread());
         self.estimated_error = error;
+        self.estimated_spread = Some(spread).filter(|s| s.is_finite());
         let due = self
             .history
             .last()
             .is_none_or(|h| t >= h[0] + HISTORY_INTERVAL * (1.0 - 1e-9));
-        let entry = [t, control_points as Real, error];
+        let entry = [t, n as Real, error, spread];
         match self.history.last_mut() {
             // A second estimate of the same state (the run's final one) replaces it.
             Some(last) if last[0] == t && last[1] == entry[1] => *last = entry,

@@ -85,6 +85,9 @@ impl Simulation {
         if adapter.wants_estimate() {
             self.estimation.get_or_insert_with(ErrorEstimation::default);
         }
+        if let Some(e) = &mut self.estimation {
+            e.set_continuity(&adapter.continuity);
+        }
         self.adapter = Some(adapter);
         self
     }
@@ -92,7 +95,10 @@ impl Simulation {
     /// Turns the error estimate on after every step (builder style), with or without
     /// adaptivity: [`Simulation::error_estimate`] then says how accurate the run is.
     pub fn estimate_errors(mut self) -> Self {
-        self.estimation.get_or_insert_with(ErrorEstimation::default);
+        let e = self.estimation.get_or_insert_with(ErrorEstimation::default);
+        if let Some(adapter) = &self.adapter {
+            e.set_continuity(&adapter.continuity);
+        }
         self
     }
 
