@@ -1,5 +1,7 @@
 //! The facade's error: every lower crate's error, plus scene and I/O errors.
 
+use crate::scene::problems::Listed;
+use crate::scene::Problem;
 use splinerod_adaptivity::AdaptError;
 use splinerod_core::{CoreError, Requirement};
 use splinerod_integrators::IntegratorError;
@@ -20,6 +22,16 @@ pub enum Error {
         field: Option<String>,
         /// What the parser said.
         message: String,
+    },
+    /// A scene's keys or values do not fit the scene format: every value of the wrong
+    /// type, unknown key or table and missing required field found, each naming its
+    /// dotted path, in the user's words ([`Problem`]).
+    #[error("{}{}", file.as_ref().map(|f| format!("{f}: ")).unwrap_or_default(), Listed(problems))]
+    Format {
+        /// The file, if read from one.
+        file: Option<String>,
+        /// What is wrong, values and keys first, then the missing fields (at least one).
+        problems: Vec<Problem>,
     },
     /// A required scene field is missing; names it.
     #[error("missing field `{field}` ({reason})")]
@@ -51,7 +63,7 @@ pub enum Error {
     #[error("stopped by an observer: {0}")]
     Stopped(String),
     /// A scene field is out of range; names the field and the value.
-    #[error("{} `{field}` = {value}: {reason}", kind_of(.field))]
+    #[error("{}: {reason}", named(.field, .value))]
     InvalidField {
         /// Dotted path of the field, e.g. `rod.linear_density` or `pins[1].at`.
         field: String,
@@ -59,6 +71,14 @@ pub enum Error {
         value: String,
         /// What it must satisfy.
         reason: String,
+    },
+    /// Command-line options that do not go together; names one and says why.
+    #[error("{message}")]
+    Options {
+        /// The option at fault (`--gif`).
+        option: &'static str,
+        /// What is wrong, naming the options.
+        message: String,
     },
     /// A scene's estimated needs exceed a resource limit (`splinerod run
     /// --allow-large` runs it anyway); names the fields behind the estimate.
@@ -168,6 +188,8 @@ impl Error {
             | Self::TooLarge { field, .. }
             | Self::OutOfMemory { field, .. } => Some(field),
             Self::Parse { field, .. } => field.as_deref(),
+            Self::Options { option, .. } => Some(option),
+            Self::Format { problems, .. } => problems.first().map(Problem::field),
             Self::Member { source, .. } => source.field_name(),
             Self::MinDtReached { .. } => Some("solver.min_dt"),
             _ => None,
@@ -237,14 +259,69 @@ pub(crate) fn finite_vec(field: &str, v: [f64; 3]) -> Result<(), Error> {
     }
 }
 
-/// What an [`Error::InvalidField`] names: a command-line option (`--every`), an input
-/// of `splinerod merge`, or a scene field.
-fn kind_of(field: &str) -> &'static str {
-    if field.starts_with("--") {
-        "option"
+/// The scene's tables and arrays of tables: an [`Error::InvalidField`] about one calls
+/// it a table, not a field.
+const TABLES: [&str; 15] = [
+    "rod",
+    "rods",
+    "pins",
+    "world",
+    "solver",
+    "output",
+    "adaptivity",
+    "grabs",
+    "cuts",
+    "ensemble",
+    "contact",
+    "obstacles",
+    "loads",
+    "rod.ring",
+    "rod.overhand",
+];
+
+/// What an [`Error::InvalidField`] names, and its value: a command-line option
+/// (`option `--every` = 0`), an input of `splinerod merge`, a scene table
+/// (`table [rod.overhand] is given`) or a scene field (`scene field `rod.degree` = 12`).
+fn named(field: &str, value: &str) -> String {
+    let what = if field.starts_with("--") {
+        format!("option `{field}`")
     } else if field.starts_with("merge") {
-        "input"
+        format!("input `{field}`")
+    } else if let Some(table) = table_name(field) {
+        table
     } else {
-        "scene field"
+        format!("scene field `{field}`")
+    };
+    match value.strip_prefix("given") {
+        Some(rest) => format!("{what} is given{rest}"),
+        None => format!("{what} = {value}"),
     }
+}
+
+/// `field` as a table's name (`[ensemble]`, `[[rods]]`, `table `pins[1]``), if it is
+/// one of the scene's [`TABLES`] (a rod of `[[rods]]` as `rod`).
+fn table_name(field: &str) -> Option<String> {
+    let mut plain = String::new();
+    let mut indexed = false;
+    for part in field.split('.') {
+        let name = part.split('[').next().unwrap_or(part);
+        indexed |= name.len() < part.len();
+        if !plain.is_empty() {
+            plain.push('.');
+        }
+        plain.push_str(name);
+    }
+    let plain = match plain.strip_prefix("rods.") {
+        Some(rest) => format!("rod.{rest}"),
+        None => plain,
+    };
+    if !TABLES.contains(&plain.as_str()) {
+        return None;
+    }
+    let array = ["rods", "pins", "grabs", "cuts", "obstacles", "loads"].contains(&field);
+    Some(match (indexed, array) {
+        (true, _) => format!("table `{field}`"),
+        (false, true) => format!("table [[{field}]]"),
+        (false, false) => format!("table [{field}]"),
+    })
 }

@@ -42,7 +42,7 @@
 //! * [`run`](mod@run) — the run loop, the observer interface and the result of a run (with its
 //!   twist, per-rod and ensemble parts);
 //! * [`output`] — observers writing pictures, plots, VTK, statistics and progress;
-//! * [`report`], [`problems`], [`bench`] — the accuracy report, its known-answer
+//! * [`report`], [`problems`], [`bench`](mod@bench) — the accuracy report, its known-answer
 //!   problems, and the speed figures;
 //! * [`knot`] — knot shapes and curve invariants (crossings, writhe).
 //!

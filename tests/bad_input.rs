@@ -92,7 +92,7 @@ fn missing_required_field() {
         assert_field(&message, &format!("missing field `{field}`"));
     }
     let no_solver = BASE.split("[solver]").next().unwrap();
-    assert_field(&rejected(no_solver), "missing field `solver`");
+    assert_field(&rejected(no_solver), "missing table [solver]");
 }
 
 #[test]

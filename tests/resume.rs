@@ -285,6 +285,7 @@ fn an_interrupted_run_leaves_a_checkpoint_to_resume() {
         .arg(d.join("vtk"))
         .args(["--every", "100"])
         .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("spawn");
     let start = std::time::Instant::now();
@@ -297,7 +298,9 @@ fn an_interrupted_run_leaves_a_checkpoint_to_resume() {
         .status();
     assert!(kill.expect("kill").success());
     let out = child.wait_with_output().expect("ends");
-    assert_eq!(out.status.code(), Some(130));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted: stopped at t = "), "{stderr}");
     let stopped = result(&parts);
     assert_eq!(stopped["interrupted"], true);
     ok(&["resume", ck.to_str().unwrap()]);

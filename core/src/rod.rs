@@ -160,7 +160,7 @@ impl Rod {
     /// A copy of this rod with every value of `values` (non-decreasing, strictly inside
     /// the domain) inserted as a knot at once: the same curve and motion on a finer basis
     /// (same quadrature points per span), and the old→new map in `op`. O(n); see
-    /// [`BasisSpace::refined`](crate::BasisSpace::refined).
+    /// [`BasisSpace::refined`].
     pub fn refined(&self, values: &[Real], op: &mut RefinementOperator) -> Result<Rod, CoreError> {
         let basis = self.basis.refined(values, op)?;
         let mut rod = Self {

@@ -1,5 +1,5 @@
 //! Several rods as one: [`Rod::join`] puts rods of one degree end to end in parameter
-//! space, separated by cuts (knots of multiplicity `d + 1`, see [`crate::cutting`]), so
+//! space, separated by cuts (knots of multiplicity `d + 1`, see [`Rod::cut`]), so
 //! that one Newton matrix, one contact detection and one adapt step serve them all
 //! while no basis function, mass entry or span-wise energy couples two of them.
 //!
@@ -15,8 +15,8 @@
 //!   is damped exactly as it would be alone.
 //!
 //! Knot changes keep the segments: their end points are cuts, which insertion cannot
-//! remove and removal never touches ([`Rod::segment_of_knot_change`] tells a caller
-//! which rod a change belongs to).
+//! remove and removal never touches ([`Rod::segment_at`] tells a caller which rod the
+//! parameter of a change belongs to).
 
 use crate::{BSplineSpace, CoreError, Material, Real, Rod};
 use std::ops::Range;

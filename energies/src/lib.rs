@@ -56,6 +56,9 @@ pub use lanes::LaneTerm;
 pub use on_segment::OnSegment;
 pub use point_force::PointForce;
 pub use point_spring::PointSpring;
-pub use stretching::{AutoInputs, Multipliers, StretchFormulation, Stretching, GUARD_DEVIATION};
+pub use stretching::{
+    AutoInputs, Multipliers, StretchFormulation, Stretching, AUTO_COMPRESSION, AUTO_LUMPING_ERROR,
+    AUTO_RESOLUTION_ERROR, GUARD_DEVIATION,
+};
 pub use twisting::holonomy::transport as parallel_transport;
 pub use twisting::{Frame, Twisting};

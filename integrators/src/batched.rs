@@ -1,6 +1,6 @@
 //! Banded Cholesky factorisation of [`LANES`] block-banded matrices of the same shape at
 //! once, structure of arrays: every scalar of a 3×3 block holds one value per matrix
-//! (lane), so each arithmetic operation of [`crate::banded_cholesky`]'s recursion
+//! (lane), so each arithmetic operation of [`crate::BandedCholesky`]'s recursion
 //!
 //! \\[ U_{ii}^T U_{ii} = A_{ii} - \sum_{k<i} U_{ki}^T U_{ki}, \qquad
 //! U_{ij} = U_{ii}^{-T}\Big(A_{ij} - \sum_{k<i} U_{ki}^T U_{kj}\Big) \\]

@@ -112,7 +112,7 @@ pub trait System: Send + Sync {
     }
     /// Scales the stiffness of every energy that has one to `scale` times its own (`1`
     /// restores it exactly): the static solver's continuation from a soft rod to the
-    /// real one ([`crate::statics`]). Returns whether anything was scaled (the default:
+    /// real one ([`StaticSolver`]). Returns whether anything was scaled (the default:
     /// no).
     fn set_stiffness_scale(&mut self, scale: Real) -> bool {
         let _ = scale;

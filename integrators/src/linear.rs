@@ -247,7 +247,7 @@ pub struct LinearSolver {
     /// The matrix's low-rank terms, applied after each solve.
     low_rank: crate::low_rank::LowRankCorrections,
     /// For a closed rod, its number `m` of distinct control points: the matrix is then
-    /// folded onto them ([`crate::periodic`]) and solves keep the copies equal. Set it
+    /// folded onto them (`integrators/src/periodic.rs`) and solves keep the copies equal. Set it
     /// before each factorisation (Newton does, from the rod's basis).
     pub periodic: Option<usize>,
     /// The folded system's solver, for a closed rod.

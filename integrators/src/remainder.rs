@@ -1,10 +1,10 @@
 //! The Newton step for a Hessian with a remainder that is not banded
-//! ([`System::add_hessian_remainder`]): conjugate gradients preconditioned by the
+//! ([`crate::System::add_hessian_remainder`]): conjugate gradients preconditioned by the
 //! factorised banded matrix.
 //!
 //! The Newton matrix is \\(A = P + sR\\): `P` the banded matrix Newton assembles and
 //! factorises, `R` the remainder (positive semi-definite) and `s` the problem's
-//! [`NewtonProblem::hessian_scale`]. With the pins \\(G\Delta x = c\\), the step
+//! [`crate::newton::NewtonProblem::hessian_scale`]. With the pins \\(G\Delta x = c\\), the step
 //! \\(\Delta x_0\\) from `P` satisfies the constraints; the exact step is
 //! \\(\Delta x_0 + e\\) with \\(G e = 0\\) and
 //!

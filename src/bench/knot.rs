@@ -12,7 +12,7 @@ const KNOT_SCENE: &str = include_str!("../../scenes/knot_tying_adaptive.toml");
 /// Simulated time the median is taken over, s.
 const DURATION: Real = 0.5;
 
-/// Median wall time of one step of the knot scene over its first [`DURATION`] s, s.
+/// Median wall time of one step of the knot scene over its first `DURATION` s, s.
 pub fn knot_step_seconds() -> Result<Real, Error> {
     let mut scene = Scene::from_toml(KNOT_SCENE)?;
     scene.solver.duration = Some(DURATION);

@@ -313,7 +313,12 @@ fn observers(args: &RunArgs) -> Result<Vec<Box<dyn Observer>>, Error> {
     }
     let camera = picture::Camera::from_name(&args.camera)?;
     if args.gif.is_some() && args.frames.is_none() {
-        return Err(Error::field("--gif", "given", "needs --frames DIR"));
+        return Err(Error::Options {
+            option: "--gif",
+            message: "--gif needs --frames DIR: the GIF is assembled from the PNG pictures \
+                      written there"
+                .into(),
+        });
     }
     let mut list: Vec<Box<dyn Observer>> = vec![Box::new(Progress::new())];
     if let Some(path) = &args.stats {
@@ -419,9 +424,12 @@ fn checkpoint_plan(
         ));
     }
     if args.gif.is_some() {
-        let reason =
-            "a GIF cannot be continued after a resume: use --frames and assemble the pictures";
-        return Err(Error::field("--gif", "given", reason));
+        return Err(Error::Options {
+            option: "--gif",
+            message: "--gif cannot go with --checkpoint: a GIF cannot be continued after a \
+                      resume (write --frames and assemble the pictures afterwards)"
+                .into(),
+        });
     }
     Ok(Some(CheckpointPlan {
         dir: dir.clone(),

@@ -12,7 +12,7 @@
 //! was abandoned is rolled back by its [`crate::Simulation`]: positions, velocities and
 //! time, not what its energies and integrator keep between sub-steps (friction anchors,
 //! contact lists, BDF2's history), nor members of an ensemble that had finished the
-//! stage. So [`Undo`] keeps the members' saved states from before each stage that is
+//! stage. So `Undo` keeps the members' saved states from before each stage that is
 //! slow enough for the copy to cost little (at most 1/[`UNDO_RATIO`] of the stage
 //! before, measured; always before the first) and rebuilds the run from them, exactly
 //! as a resume does. A stage abandoned without such a copy (a fast stage followed by
@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 /// sooner stops the run between steps, losing nothing.
 pub const STOP_GRACE: Duration = Duration::from_millis(250);
 
-/// [`Undo`] copies the members' states before a stage only when the stage before took
+/// `Undo` copies the members' states before a stage only when the stage before took
 /// at least this many times as long as the last copy.
 pub const UNDO_RATIO: Real = 50.0;
 

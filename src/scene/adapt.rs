@@ -125,7 +125,7 @@ impl AdaptivitySpec {
         struct Table {
             adaptivity: AdaptivitySpec,
         }
-        let table: Table = toml::from_str(text).map_err(|e| crate::scene::parse_error(text, &e))?;
+        let table: Table = crate::scene::problems::read(text, |_| Vec::new())?;
         Ok(table.adaptivity)
     }
 

@@ -253,7 +253,7 @@ impl Scene {
         Ok(Some(twisting))
     }
 
-    /// The adapt step of `[adaptivity]`, if enabled ([`AdaptivitySpec::adapter`]).
+    /// The adapt step of `[adaptivity]`, if enabled ([`crate::scene::AdaptivitySpec::adapter`]).
     pub fn adapter(&self) -> Result<Option<Adapter>, Error> {
         let Some(a) = self.adaptivity.as_ref().filter(|a| a.enabled) else {
             return Ok(None);

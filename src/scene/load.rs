@@ -1,10 +1,12 @@
 //! Reading a scene: TOML text or a file parsed, resolved (an overhand knot fitted,
-//! `[[rods]]` resolved one by one) and validated; parse errors as one line naming the
-//! field and position.
+//! `[[rods]]` resolved one by one) and validated; parse errors as one line naming
+//! every problem found, its field and position ([`crate::scene::problems`]).
 
+use crate::scene::problems::{self, line_column, Problem};
 use crate::scene::Scene;
 use crate::Error;
 use splinerod_core::Cancel;
+use toml::de::DeTable;
 
 impl Scene {
     /// Parses and validates a scene from TOML text.
@@ -15,7 +17,7 @@ impl Scene {
     /// [`Scene::from_toml`], polling `cancel` during the setup that may take seconds
     /// (an overhand knot's fit): a stop asked returns [`Error::Interrupted`].
     pub fn from_toml_cancellable(text: &str, cancel: &Cancel) -> Result<Self, Error> {
-        let mut scene: Scene = toml::from_str(text).map_err(|e| parse_error(text, &e))?;
+        let mut scene: Scene = problems::read(text, missing_alternatives)?;
         if scene.resolve_rods(cancel)? {
             return Ok(scene);
         }
@@ -51,6 +53,10 @@ impl Scene {
                 message,
                 field,
             },
+            Error::Format { problems, .. } => Error::Format {
+                file: Some(path.display().to_string()),
+                problems,
+            },
             other => other,
         })
     }
@@ -81,23 +87,41 @@ pub(crate) fn parse_error(text: &str, e: &toml::de::Error) -> Error {
         Some(p) => message[p.len()..].split('`').next().map(str::to_string),
         None => Some(path.to_string()).filter(|p| !p.is_empty()),
     };
-    match e.span() {
-        Some(span) => {
-            let before = text.get(..span.start).unwrap_or(text);
-            let line = before.matches('\n').count() + 1;
-            let column = before.chars().rev().take_while(|&c| c != '\n').count() + 1;
-            Error::Parse {
-                file: None,
-                position: Some((line, column)),
-                message,
-                field,
+    Error::Parse {
+        file: None,
+        position: e.span().map(|span| line_column(text, span.start)),
+        message,
+        field,
+    }
+}
+
+/// The required fields of a scene `table` serde cannot name, being one of two: no
+/// `[rod]` and no `[[rods]]`, or a rod with neither `rest_length` nor `overhand`.
+fn missing_alternatives(table: &DeTable<'_>) -> Vec<Problem> {
+    let mut missing = Vec::new();
+    let mut rods: Vec<(String, &DeTable<'_>)> = Vec::new();
+    match (table.get("rod"), table.get("rods")) {
+        (None, None) => missing.push(Problem::Missing {
+            field: "rod".into(),
+            table: true,
+            note: Some("or [[rods]]".into()),
+        }),
+        (Some(rod), _) => rods.extend(rod.get_ref().as_table().map(|t| ("rod".into(), t))),
+        (None, Some(list)) => {
+            let list = list.get_ref().as_array().map(|a| a.iter()).into_iter();
+            for (i, rod) in list.flatten().enumerate() {
+                rods.extend(rod.get_ref().as_table().map(|t| (format!("rods[{i}]"), t)));
             }
         }
-        None => Error::Parse {
-            file: None,
-            position: None,
-            message,
-            field,
-        },
     }
+    for (path, rod) in rods {
+        if rod.get("rest_length").is_none() && rod.get("overhand").is_none() {
+            missing.push(Problem::Missing {
+                field: format!("{path}.rest_length"),
+                table: false,
+                note: Some(format!("required unless {path}.overhand gives the shape")),
+            });
+        }
+    }
+    missing
 }

@@ -2,8 +2,9 @@
 //! validation. Material coordinates in scenes are fractions of the rest length in
 //! `[0, 1]`; the library works in rest arclength (m).
 //!
-//! Unknown fields are rejected, missing ones named by the parser, and every value is
-//! range-checked by [`Scene::validate`], which names the field in its error.
+//! Unknown fields and tables are rejected, missing ones and values of the wrong type
+//! named, all of them at once (each a [`Problem`]), and every value is range-checked by
+//! [`Scene::validate`], which names the field in its error.
 
 pub(crate) mod adapt;
 mod auto_form;
@@ -11,12 +12,15 @@ mod build;
 pub(crate) mod closed;
 pub(crate) mod contact;
 pub(crate) mod ensemble;
+mod found;
 pub mod limits;
 mod load;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
 pub(crate) mod pins;
 pub(crate) mod plausible;
+mod probe;
+pub(crate) mod problems;
 pub(crate) mod rods;
 pub(crate) mod shape;
 pub(crate) mod solver;
@@ -32,6 +36,7 @@ pub use crate::scene::loads::LoadSpec;
 pub use crate::scene::obstacles::ObstacleSpec;
 pub use crate::scene::pins::{PinSpec, WorldSpec};
 pub use crate::scene::plausible::MIN_START_STRETCH;
+pub use crate::scene::problems::Problem;
 pub use crate::scene::shape::{OverhandShape, RestShape, StretchFormulationSpec};
 use crate::Error;
 use serde::Deserialize;
@@ -124,9 +129,9 @@ pub struct RodSpec {
     pub degree: usize,
     /// `"clamped"` (default), `"uniform"`, or an explicit non-decreasing knot vector of
     /// `control_points + degree + 1` values (any units; the domain is mapped to `[0, L]`).
-    /// A closed rod's are periodic ([`closed`]). Read it through [`RodSpec::knot_layout`].
+    /// A closed rod's are periodic ([`RingSpec`]). Read it through [`RodSpec::knot_layout`].
     pub knots: Option<KnotsSpec>,
-    /// A closed rod: the curve wraps from the end back to the start ([`closed`]).
+    /// A closed rod: the curve wraps from the end back to the start ([`RingSpec`]).
     #[serde(default)]
     pub closed: bool,
     /// `[rod.ring]`: a closed rod's initial circle (makes the rod closed).
@@ -160,13 +165,36 @@ impl RodSpec {
 }
 
 /// `rod.knots`: a named layout or an explicit vector.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(untagged)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum KnotsSpec {
     /// `"clamped"` or `"uniform"`.
     Named(String),
     /// Explicit knot values.
     Explicit(Vec<f64>),
+}
+
+impl<'de> Deserialize<'de> for KnotsSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Knots;
+        impl<'de> serde::de::Visitor<'de> for Knots {
+            type Value = KnotsSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("\"clamped\", \"uniform\" or a list of knots")
+            }
+            fn visit_str<E: serde::de::Error>(self, name: &str) -> Result<KnotsSpec, E> {
+                Ok(KnotsSpec::Named(name.to_string()))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> Result<KnotsSpec, A::Error> {
+                let knots =
+                    Deserialize::deserialize(serde::de::value::SeqAccessDeserializer::new(seq))?;
+                Ok(KnotsSpec::Explicit(knots))
+            }
+        }
+        d.deserialize_any(Knots)
+    }
 }
 
 impl Default for KnotsSpec {

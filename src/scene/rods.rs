@@ -154,9 +154,14 @@ impl Scene {
     pub(crate) fn resolve_rods(&mut self, cancel: &Cancel) -> Result<bool, Error> {
         if self.rods.is_empty() {
             if self.rod.absent {
-                return Err(Error::MissingField {
+                let problems = vec![crate::scene::Problem::Missing {
                     field: "rod".into(),
-                    reason: "a scene needs a [rod] table or [[rods]] tables".into(),
+                    table: true,
+                    note: Some("or [[rods]]".into()),
+                }];
+                return Err(Error::Format {
+                    file: None,
+                    problems,
                 });
             }
             return Ok(false);

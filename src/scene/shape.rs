@@ -126,22 +126,35 @@ impl Scene {
 pub(crate) fn stiffness_or_inextensible<'de, D: serde::Deserializer<'de>>(
     d: D,
 ) -> Result<f64, D::Error> {
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum Given {
-        Number(f64),
-        Word(String),
+    struct Stiffness;
+    impl serde::de::Visitor<'_> for Stiffness {
+        type Value = f64;
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("a number (N) or \"inextensible\"")
+        }
+        fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<f64, E> {
+            match x.is_infinite() {
+                // "= value: reason": worded as a scene field out of range.
+                true => Err(E::custom(format!(
+                    "= {x}: must be finite and positive (or \"inextensible\")"
+                ))),
+                false => Ok(x),
+            }
+        }
+        fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<f64, E> {
+            Ok(x as f64)
+        }
+        fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<f64, E> {
+            Ok(x as f64)
+        }
+        fn visit_str<E: serde::de::Error>(self, w: &str) -> Result<f64, E> {
+            match w {
+                "inextensible" => Ok(f64::INFINITY),
+                _ => Err(E::invalid_value(serde::de::Unexpected::Str(w), &self)),
+            }
+        }
     }
-    match Given::deserialize(d)? {
-        Given::Number(x) if x.is_infinite() => Err(serde::de::Error::custom(format!(
-            "rod.stretch_stiffness = {x}: must be finite and positive (or \"inextensible\")"
-        ))),
-        Given::Number(x) => Ok(x),
-        Given::Word(w) if w == "inextensible" => Ok(f64::INFINITY),
-        Given::Word(w) => Err(serde::de::Error::custom(format!(
-            "rod.stretch_stiffness: expected a number (N) or \"inextensible\", got \"{w}\""
-        ))),
-    }
+    d.deserialize_any(Stiffness)
 }
 
 pub(crate) fn default_degree() -> usize {

@@ -25,7 +25,7 @@ pub struct Ensemble {
     /// What each member's last step did (same order).
     pub reports: Vec<StepReport>,
     /// Solve the steps of members that share a shape [`LANES`] at a time (the batched
-    /// step, [`crate::world::lanes`]). Default true; false steps every member alone.
+    /// step, `world/lanes.rs`). Default true; false steps every member alone.
     pub batched: bool,
     /// Index of the first member in the whole ensemble (a shard's first member): the
     /// groups of [`LANES`] start at multiples of [`LANES`] in that numbering, so a

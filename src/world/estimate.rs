@@ -97,7 +97,7 @@ impl ErrorEstimation {
 
     /// Records the estimate just made for the schedule. The interval doubles when the
     /// adapter is `content` with it (far within its tolerance; `None`: no adapter), the
-    /// knots are the last estimate's and the estimate is steady (within [`STEADY`] of
+    /// knots are the last estimate's and the estimate is steady (within `STEADY` of
     /// the last, or negligible).
     pub fn schedule(&mut self, rod: &Rod, interactions: &[Real], content: Option<bool>) {
         let s = &mut self.schedule;

@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::ops::AddAssign;
 
 /// Why a member of an ensemble took its step alone (its own solver) instead of through
-/// the lanes of the batched step ([`crate::world::lanes`]). Every reason is the
+/// the lanes of the batched step (`world/lanes.rs`). Every reason is the
 /// member's own: none depends on which members share its group or shard.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Unbatched {

@@ -27,10 +27,10 @@
 //!
 //! The detection is cached on the positions and the basis epoch: the energy, gradient
 //! and Hessian of one Newton iterate detect once. Between iterates and steps, a
-//! **Verlet list** ([`Skin`]) spares the broad phase and the far sample pairs: a full
-//! detection lists every sample pair closer than `reach + margin` (margin
-//! [`SKIN`]` · reach`), and until some control point has moved by `margin / 2` since,
-//! a detection re-measures only those pairs — the same pairs closer than the reach as a
+//! **Verlet list** (the `Skin` of `contact/skin.rs`) spares the broad phase and the far
+//! sample pairs: a full detection lists every sample pair closer than `reach + margin`
+//! (margin `SKIN · reach`), and until some control point has moved by `margin / 2`
+//! since, a detection re-measures only those pairs — the same pairs closer than the reach as a
 //! full detection would find (possibly listed in another order, which changes sums by
 //! round-off only). No allocation once the buffers have grown.
 

@@ -43,7 +43,7 @@ mod table;
 mod tabulated;
 mod tensions;
 
-pub use auto::AutoInputs;
+pub use auto::{AutoInputs, AUTO_COMPRESSION, AUTO_LUMPING_ERROR, AUTO_RESOLUTION_ERROR};
 pub use guard::GUARD_DEVIATION;
 pub(crate) use lanes::add_moment_lanes;
 pub use lanes::MomentTerm;
@@ -111,7 +111,7 @@ pub struct Stretching {
     /// For an inextensible rod ([`Stretching::inextensible`]): the constraints'
     /// multipliers; their penalty then takes the place of `stiffness`.
     pub multipliers: Option<Multipliers>,
-    /// The projection guard of the mixed forms ([`guard`]): stiffen where the strain
+    /// The projection guard of the mixed forms (`stretching/guard.rs`): stiffen where the strain
     /// varies inside a knot span by more than [`GUARD_DEVIATION`]. Off by default;
     /// scenes with contact turn it on.
     pub guard: bool,

@@ -2,7 +2,7 @@
 //! parallel transport from the start clamp along the centreline to the end clamp, misses
 //! the end clamp's director.
 //!
-//! The tangent is sampled at points \\(s_1 < \dots < s_N\\) ([`Samples`]): the domain
+//! The tangent is sampled at points \\(s_1 < \dots < s_N\\) (`Samples`): the domain
 //! ends, the rod's Gauss points and the interior knots where \\(C'\\) is continuous.
 //! With \\(a_k = C'(s_k)\\), \\(T_k = a_k/|a_k|\\), and the clamp axes as \\(T_0\\) and
 //! \\(T_{N+1}\\), the director \\(D_0\\) of the start clamp is carried from \\(T_k\\) to
@@ -29,7 +29,7 @@
 //! and \\(\partial h_k/\partial a_k = (K_y(T_{k-1}, T_k) + K_x(T_k, T_{k+1}))
 //! P_k/(2|a_k|^2) - (\kappa b_k + \kappa b_{k+1}) a_k^T/(2|a_k|^3)\\). Consecutive samples
 //! share a span or meet at a knot, so the Hessian stays in the band of the rod (one
-//! more at a kink, where the knot is not sampled: see [`Samples::bandwidth`]).
+//! more at a kink, where the knot is not sampled: see `Samples::bandwidth`).
 //!
 //! Everything is a pass over the samples: O(n), no allocation once sized.
 
