@@ -79,6 +79,7 @@ fn io_error(error: &Error) -> Option<&std::io::Error> {
 fn is_input_error(error: &Error) -> bool {
     match error {
         Error::Parse { .. }
+        | Error::Format { .. }
         | Error::MissingField { .. }
         | Error::InvalidField { .. }
         | Error::TooLarge { .. }

@@ -4,8 +4,10 @@
 use crate::errors::{scene_error, shield, IntoPyResult};
 use crate::interrupt::Interrupt;
 use crate::simulation::Simulation;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use splinerod::scene::Problem;
 use splinerod::{Error, SceneRun};
 
 /// A validated scene: `Scene.from_toml(path_or_text)` or `Scene(dict)`.
@@ -18,10 +20,12 @@ pub struct Scene {
 #[pymethods]
 impl Scene {
     /// A scene from a dict with the TOML file's tables and keys (lists of dicts for
-    /// `[[pins]]` and the like; numpy arrays are accepted where lists are).
+    /// `[[pins]]` and the like; numpy arrays are accepted where lists are). A path or
+    /// TOML text raises `TypeError` pointing to `Scene.from_toml`.
     #[new]
-    fn new(table: &Bound<'_, PyDict>) -> PyResult<Self> {
+    fn new(table: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = table.py();
+        let table = table.cast::<PyDict>().map_err(|_| not_a_dict(table))?;
         let value = toml_value(table.as_any(), "")?;
         let text = toml::to_string(&value).map_err(|e| scene_error(py, None, e.to_string()))?;
         shield(|| {
@@ -111,6 +115,30 @@ impl Scene {
     }
 }
 
+/// The `TypeError` of `Scene(x)` for an `x` that is not a dict: a path or TOML text is
+/// pointed to `Scene.from_toml`.
+fn not_a_dict(given: &Bound<'_, PyAny>) -> PyErr {
+    let kind = given
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "object".into());
+    let pathlike =
+        given.is_instance_of::<PyString>() || given.hasattr("__fspath__").unwrap_or(false);
+    let message = if pathlike {
+        format!(
+            "Scene() takes a dict of the scene's tables, not a {kind}: for a scene file or \
+             TOML text use Scene.from_toml(path_or_text)"
+        )
+    } else {
+        format!(
+            "Scene() takes a dict of the scene's tables, not a {kind} (Scene.from_toml reads \
+             a scene file or TOML text)"
+        )
+    };
+    PyTypeError::new_err(message)
+}
+
 /// A parse error of generated TOML without its line and column (they would point into
 /// text the user never saw).
 pub fn without_position(error: Error) -> Error {
@@ -120,6 +148,20 @@ pub fn without_position(error: Error) -> Error {
             position: None,
             message,
             field,
+        },
+        Error::Format { problems, .. } => Error::Format {
+            file: None,
+            problems: problems
+                .into_iter()
+                .map(|p| match p {
+                    Problem::Wrong { field, message, .. } => Problem::Wrong {
+                        field,
+                        position: None,
+                        message,
+                    },
+                    missing => missing,
+                })
+                .collect(),
         },
         other => other,
     }

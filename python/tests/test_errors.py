@@ -61,6 +61,54 @@ def test_missing_and_unknown_tables():
     assert caught.value.field == "wrold"
 
 
+def scene_error(table):
+    """The message of the SceneError `Scene(table)` raises; free of Rust's words and of
+    positions in the TOML the dict became."""
+    with pytest.raises(splinerod.SceneError) as caught:
+        splinerod.Scene(table)
+    message = str(caught.value)
+    for rust in ("f64", "usize", "struct ", "invalid type", "line "):
+        assert rust not in message, message
+    return message
+
+
+def test_dict_scene_errors_in_the_users_words():
+    message = scene_error(cable(rest_length="1.0"))
+    assert message == '`rod.rest_length`: expected a number, found the string "1.0"'
+    message = scene_error(cable(control_points=16.0))
+    assert message == "`rod.control_points`: expected a whole number, found 16.0"
+    message = scene_error(cable(start=[0.0, 0.0]))
+    assert message == "`rod.start`: expected a list of 3 numbers, found a list of 2"
+    message = scene_error({**cable(), "wrold": {"gravity": [0.0, 0.0, 0.0]}})
+    assert message == "unknown table [wrold]: did you mean [world]?"
+    table = cable(linear_densty=0.1)
+    del table["rod"]["linear_density"]
+    message = scene_error(table)
+    assert "unknown field `rod.linear_densty`: did you mean `linear_density`?" in message
+
+
+def test_every_missing_field_is_named_at_once():
+    table = cable()
+    del table["rod"]["linear_density"], table["rod"]["control_points"]
+    del table["solver"]["method"]
+    with pytest.raises(splinerod.SceneError) as caught:
+        splinerod.Scene(table)
+    assert str(caught.value) == (
+        "missing fields `rod.linear_density`, `rod.control_points` and `solver.method`"
+    )
+    assert caught.value.field == "rod.linear_density"
+    del table["solver"]
+    assert "missing table [solver]" in scene_error(table)
+
+
+def test_a_path_is_pointed_to_from_toml():
+    path = ROOT / "scenes" / "hanging_cable.toml"
+    for given in (str(path), path, "[rod]\nrest_length = 1.0\n"):
+        with pytest.raises(TypeError, match=r"use Scene\.from_toml\(path_or_text\)"):
+            splinerod.Scene(given)
+    assert splinerod.Scene.from_toml(path).duration > 0.0
+
+
 def test_values_toml_has_no_word_for():
     with pytest.raises(splinerod.SceneError) as caught:
         splinerod.Scene(cable(damping=None))
