@@ -86,15 +86,15 @@ fn cable_sweep_meets_its_tolerances_with_honest_estimates() {
         assert!(r.error <= 2.0 * tol, "tol {tol}: error {:e}", r.error);
         let e = r.effectivity();
         assert!((1.0 / 3.0..=3.0).contains(&e), "tol {tol}: effectivity {e}");
-        // No more than 1.75 × the uniform rod of the same error (where the sweep has one;
+        // No more than 1.6 × the uniform rod of the same error (where the sweep has one;
         // 1.5 before #46: the trades at the 200-point cap during the straight start's
-        // transient leave a placement the rod keeps: measured 1.10, 1.11, 1.59, 1.69 for
-        // 1e-2 … 1e-5; an open regression, see ARCHITECTURE.md #46).
+        // transient leave a placement the settled rod improves only by trades at rest;
+        // measured 0.97, 1.34, 1.24, 1.54 for 1e-2 … 1e-5).
         let needed = uniform_count_for(r.error, &uniform);
         if needed.is_finite() {
             let ratio = r.control_points as Real / needed;
             println!("  uniform rod of that error: {needed:.1} control points, ratio {ratio:.2}");
-            assert!(ratio <= 1.75, "tol {tol}: ratio {ratio}");
+            assert!(ratio <= 1.6, "tol {tol}: ratio {ratio}");
         }
     }
 }

@@ -15,6 +15,11 @@
 //!   quarter), and never two neighbouring knots in one step. Refining above `τ` and
 //!   coarsening far below it is the hysteresis that keeps a knot from coming and going;
 //!   the adapter adds its own (a fresh knot stays for `hysteresis_steps`).
+//! * **trade at rest**: while every span is within `τ` but the largest span estimate
+//!   `e_max` is above `coarsen · τ`, one knot per step whose cost is below
+//!   `0.7 · e_max` moves to the middle of the worst span (each such trade lowers the
+//!   largest estimate by 0.7 at least, so it ends): the placement a transient left is
+//!   evened out once the rod settles.
 //! * **trade at the budget**: when the rod has `budget` control points (the adapter's
 //!   `max_control_points`) and spans above `τ` want more than the budget allows, the
 //!   knots whose cost is below half the largest span estimate `e_max` are removed,
@@ -36,6 +41,11 @@
 use crate::estimate::ErrorEstimate;
 use crate::{AdaptError, Refinement, RefinementCriterion};
 use splinerod_core::{Real, Rod};
+
+/// Within tolerance, a knot whose cost is below this fraction of the largest span
+/// estimate is moved to that span (each such trade lowers the largest estimate by this
+/// factor at least, so trading ends).
+const AT_REST_TRADE: Real = 0.7;
 
 /// Refines where the estimated error exceeds a tolerance, coarsens far below it.
 #[derive(Debug, Clone, PartialEq)]
@@ -260,10 +270,10 @@ impl RefinementCriterion for ToleranceCriterion {
         // as many as the insertions need (a trade).
         let wanted = out.len() - from;
         let over = self.over_budget(rod, wanted);
-        if wanted > 0 {
-            if over > 0 {
-                self.mark_removals(rod, interactions, 0.5 * largest, over, out);
-            }
+        // Refining (some span above tolerance, split in this step or not): the cheap
+        // knots go and, at the budget, trades; no trade at rest.
+        if self.estimate.spans.iter().any(|s| s.midpoint > tol) {
+            self.mark_removals(rod, interactions, 0.5 * largest, over, out);
             return;
         }
         // Within tolerance but not content: one trade towards the largest estimate.
@@ -277,7 +287,14 @@ impl RefinementCriterion for ToleranceCriterion {
         };
         let uneven = worst.midpoint > self.coarsen * tol;
         let extra = usize::from(uneven);
-        if self.mark_removals(rod, interactions, 0.5 * worst.midpoint, extra, out) > 0 {
+        if self.mark_removals(
+            rod,
+            interactions,
+            AT_REST_TRADE * worst.midpoint,
+            extra,
+            out,
+        ) > 0
+        {
             let i = knots.partition_point(|&t| t <= worst.start);
             if knots.get(i) == Some(&worst.end) {
                 out.push(Refinement::Insert {
