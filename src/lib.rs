@@ -52,6 +52,7 @@
 
 #[cfg(feature = "parallel")]
 pub mod bench;
+pub mod bundled;
 mod error;
 pub mod knot;
 pub mod output;
