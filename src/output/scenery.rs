@@ -2,7 +2,8 @@
 //! are at the frame's time, and the names of the rods of a `[[rods]]` scene.
 //!
 //! Every camera is orthographic (the oblique one is a rotation), so with view
-//! coordinates \\(v = R x\\) (right, up, toward the viewer; [`Camera::project`]):
+//! coordinates \\(v = R x\\) (right, up, toward the viewer;
+//! [`Camera::project`](super::camera::Camera::project)):
 //! * a **plane** through `p` with normal `n` (the floor: `p = (0, floor, 0)`,
 //!   `n = (0, 1, 0)`) is drawn as its solid side \\(\\{v : R n \cdot (v - R p) \le 0\\}\\)
 //!   clipped to the view's box (the whole picture across, as deep as the framed points)
