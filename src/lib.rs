@@ -44,14 +44,17 @@
 //! * [`output`] — observers writing pictures, plots, VTK, statistics and progress;
 //! * [`report`], [`problems`], [`bench`](mod@bench) — the accuracy report, its known-answer
 //!   problems, and the speed figures;
-//! * [`knot`] — knot shapes and curve invariants (crossings, writhe).
+//! * [`knot`] — knot shapes and curve invariants (crossings, writhe);
+//! * [`bundled`] — the scenes of `scenes/`, compiled in.
 //!
 //! Imports run one way: `world` uses none of the others; `scene` → `world`, `knot`;
-//! `run` → `scene`, `world`, `knot`; `output` → `run`; `problems` → `run`; `report` and
-//! `bench` → all of these. `knot` uses none.
+//! `run` → `scene`, `world`, `knot`; `output` → `run` (and the scene and world a frame
+//! carries: obstacles, their paths); `bundled` → `scene`; `problems` → `run`; `report`
+//! and `bench` → all of these. `knot` uses none.
 
 #[cfg(feature = "parallel")]
 pub mod bench;
+pub mod bundled;
 mod error;
 pub mod knot;
 pub mod output;

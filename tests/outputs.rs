@@ -1,6 +1,7 @@
-//! Per-step statistics, the speed-vs-error report and the CLI's output flags: files that
-//! decode, one CSV row per step, the measured order in the report, and clear errors
-//! (exit code 2, nothing claiming to be complete) for bad output options.
+//! Per-step statistics, the speed-vs-error report, the CLI's output flags and its
+//! summary: files that decode, one CSV row per step, the measured order in the report,
+//! clear errors (exit code 2, nothing claiming to be complete) for bad output options,
+//! and summary lines only for what acts.
 
 use splinerod::output::stats::StatsWriter;
 use splinerod::{run_observed, Observer, Scene};
@@ -146,4 +147,80 @@ fn bad_output_options_fail_cleanly() {
         );
         assert!(!stderr.contains("panicked"), "{stderr}");
     }
+}
+
+/// `CABLE` with `extra` tables appended.
+fn cable_with(extra: &str) -> Scene {
+    Scene::from_toml(&format!("{CABLE}{extra}")).expect("the test scene is valid")
+}
+
+#[test]
+fn summary_leaves_out_energies_that_do_nothing() {
+    // A load on for the first 0.05 s only: its energy is exactly zero at the end.
+    let scene =
+        cable_with("[[loads]]\nat = 0.5\npath = [[0.0, 0.0, 1e-3, 0.0], [0.05, 0.0, 0.0, 0.0]]\n");
+    let result = splinerod::run(&scene).expect("the run succeeds");
+    assert_eq!(result.energy.get("load"), Some(&0.0), "{:?}", result.energy);
+    let summary = result.summary();
+    let line = summary
+        .lines()
+        .find(|l| l.starts_with("energy (J): "))
+        .expect(&summary);
+    assert!(!line.contains("load"), "{summary}");
+    assert!(
+        line.contains("stretch ") && line.contains("kinetic "),
+        "{summary}"
+    );
+}
+
+#[test]
+fn summary_has_no_contact_line_when_nothing_touched() {
+    let text = CABLE.replace(
+        "control_points = 12\n",
+        "control_points = 12\nradius = 0.005\n",
+    );
+    let scene = Scene::from_toml(&format!("{text}[contact]\nstiffness = 1e4\n")).expect("valid");
+    let result = splinerod::run(&scene).expect("the run succeeds");
+    let contact = result.contact.expect("contact statistics");
+    assert_eq!((contact.max_pairs, contact.max_obstacle_contacts), (0, 0));
+    assert!(
+        !result.summary().contains("contact"),
+        "{}",
+        result.summary()
+    );
+}
+
+#[test]
+fn summary_counts_the_points_on_the_floor() {
+    let scene = splinerod::bundled::scene("ring_drop").expect("bundled scene");
+    let result = splinerod::run(&scene).expect("the run succeeds");
+    let contact = result.contact.expect("contact statistics");
+    assert!(result.energy["contact"] > 0.0, "{:?}", result.energy);
+    assert!(contact.max_obstacle_contacts > 0, "{contact:?}");
+    let summary = result.summary();
+    let expected = format!(
+        "at most {} points against the floor\n",
+        contact.max_obstacle_contacts
+    );
+    assert!(summary.contains(&expected), "{summary}");
+    assert!(
+        !summary.contains("pairs"),
+        "no strand touches another: {summary}"
+    );
+}
+
+#[test]
+fn ensemble_summary_names_its_member_and_spans_all() {
+    let scene = cable_with("[ensemble]\ncount = 3\nseed = 1\nlinear_density = [0.05, 0.2]\n");
+    let result = splinerod::run(&scene).expect("the run succeeds");
+    assert_eq!(result.ensemble.len(), 3);
+    let summary = result.summary();
+    assert!(summary.contains("energy (J) of member 0: "), "{summary}");
+    let sags: Vec<f64> = result.ensemble.iter().map(|m| m.sag).collect();
+    let (lo, hi) = sags
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &s| (a.min(s), b.max(s)));
+    assert!(hi > lo, "the members differ: {sags:?}");
+    let expected = format!("ensemble: 3 members (0 to 2), sag {lo:.4e} to {hi:.4e} m");
+    assert!(summary.contains(&expected), "{summary}");
 }

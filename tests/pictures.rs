@@ -193,6 +193,118 @@ fn a_static_solve_gives_the_initial_and_the_final_frame() {
     cleanup(&dir);
 }
 
+/// Two named rods (radius 1 cm) 0.3 m above a floor at y = 0, a sphere below the gap
+/// between them.
+const SCENERY: &str = r#"
+[[rods]]
+name = "alpha"
+rest_length = 0.4
+linear_density = 0.1
+stretch_stiffness = 100.0
+control_points = 8
+radius = 0.01
+start = [-0.5, 0.3, 0.0]
+end = [-0.1, 0.3, 0.0]
+
+[[rods]]
+name = "beta"
+rest_length = 0.4
+linear_density = 0.1
+stretch_stiffness = 100.0
+control_points = 8
+radius = 0.01
+start = [0.1, 0.3, 0.0]
+end = [0.5, 0.3, 0.0]
+
+[contact]
+stiffness = 1e4
+floor = 0.0
+
+[[obstacles]]
+kind = "sphere"
+centre = [0.0, 0.1, 0.0]
+radius = 0.05
+
+[solver]
+method = "implicit-euler"
+dt = 0.01
+duration = 0.02
+"#;
+
+/// The RGB colour at a point of the picture.
+fn colour(rgb: &[u8], (x, y): (f64, f64)) -> [u8; 3] {
+    let i = 3 * (y.round() as usize * WIDTH as usize + x.round() as usize);
+    [rgb[i], rgb[i + 1], rgb[i + 2]]
+}
+
+/// Shaded: a light grey, neither white nor ink.
+fn shaded(c: [u8; 3]) -> bool {
+    c[0] == c[1] && c[1] == c[2] && (200..=240).contains(&c[0])
+}
+
+#[test]
+fn pictures_show_the_floor_obstacles_rod_names_and_thickness() {
+    let dir = scratch("scenery");
+    let scene = Scene::from_toml(SCENERY).expect("the test scene is valid");
+    let mut pictures = Pictures::new(&dir, 100, Camera::Xy, true, false).expect("pictures");
+    run_with(&scene, &mut pictures);
+    let view = *pictures.view().expect("view");
+    let (_, _, first) = decode(&dir.join("frame_00000.png"));
+    let at = |x: f64, y: f64| view.pixel(&Vector3::new(x, y, 0.0));
+    let mm = 1e-3 / view.metres_per_pixel(); // pixels per millimetre
+    assert!(mm > 0.5, "the framing shows millimetres: {mm} px/mm");
+
+    // The floor: shaded below y = 0, white just above it away from the rods.
+    let (fx, fy) = at(0.3, 0.0);
+    assert!(
+        shaded(colour(&first, (fx, fy + 8.0))),
+        "{:?}",
+        colour(&first, (fx, fy + 8.0))
+    );
+    assert!(!inked(&first, at(0.3, 0.05), 2), "blank above the floor");
+    // The sphere: shaded inside, outlined at its radius, blank just outside.
+    assert!(
+        shaded(colour(&first, at(0.0, 0.1))),
+        "{:?}",
+        colour(&first, at(0.0, 0.1))
+    );
+    assert!(inked(&first, at(0.05, 0.1), 1), "the sphere's outline");
+    assert!(!inked(&first, at(0.0, 0.17), 2), "blank above the sphere");
+    // A rod 20 mm thick is drawn 20 mm thick (the plain line is 5 px).
+    let (x, y) = at(-0.3, 0.3);
+    let half = 10.0 * mm;
+    assert!(
+        half > 5.0,
+        "the rod's diameter is wider than the plain line"
+    );
+    assert!(inked(&first, (x, y - half + 1.5), 0) && inked(&first, (x, y + half - 1.5), 0));
+    assert!(
+        !inked(&first, (x, y - half - 2.0), 0),
+        "no wider than the rod"
+    );
+    // Both rods are named, and the caption counts rods, not pieces.
+    let svg = std::fs::read_to_string(dir.join("frame_00000.svg")).expect("svg");
+    // Each name is a text element of its own, inside the picture ("alpha" is 5
+    // characters of at most 11 px).
+    for name in ["alpha", "beta"] {
+        let at = svg
+            .find(&format!("\n{name}\n"))
+            .expect("the rod's name in the SVG");
+        let tag = &svg[svg[..at].rfind("<text").expect("its text element")..at];
+        let x = tag.split("x=\"").nth(1).and_then(|t| t.split('"').next());
+        let x: f64 = x.and_then(|x| x.parse().ok()).expect("its x");
+        assert!(
+            x >= 0.0 && x + 55.0 <= f64::from(WIDTH),
+            "{name} at x = {x}"
+        );
+    }
+    assert!(
+        svg.contains("2 rods") && !svg.contains("pieces"),
+        "the caption's count"
+    );
+    cleanup(&dir);
+}
+
 /// The error's message, which must name `what`.
 fn assert_names(result: Result<impl std::fmt::Debug, Error>, what: &str) {
     let message = result.expect_err("an error").to_string();

@@ -4,7 +4,7 @@ whose control points are the degrees of freedom, with adaptive resolution.
 Run a scene::
 
     import splinerod
-    scene = splinerod.Scene.from_toml("scenes/hanging_cable.toml")
+    scene = splinerod.bundled_scene("hanging_cable")   # or Scene.from_toml("my.toml")
     sim = scene.simulation()
     sim.run()                       # to the scene's duration
     print(sim.positions([0.25, 0.5, 0.75]))
@@ -13,7 +13,9 @@ Run a scene::
 or build a rod in code (``Material``, ``BSplineSpace``, ``Rod``, ``Pin``, energies,
 integrators, ``RodSystem``, ``Simulation``). Bad input raises ``SceneError`` (a
 ``ValueError``) whose ``field`` names the field; a run that cannot go on raises
-``SplinerodError`` (a ``RuntimeError``). ``kernels()`` names the kernel set the
+``SplinerodError`` (a ``RuntimeError``). ``bundled_scene(name)`` loads one of the
+repository's ``scenes/`` (compiled in, so found from any directory) and
+``bundled_scenes()`` lists them. ``kernels()`` names the kernel set the
 process computes with (``SPLINEROD_KERNELS``; results are bit-identical under one set).
 """
 
@@ -42,6 +44,8 @@ from ._splinerod import (
     StaticSolver,
     Stretching,
     __version__,
+    bundled_scene,
+    bundled_scenes,
     kernels,
 )
 
@@ -70,5 +74,7 @@ __all__ = [
     "StaticSolver",
     "Stretching",
     "__version__",
+    "bundled_scene",
+    "bundled_scenes",
     "kernels",
 ]

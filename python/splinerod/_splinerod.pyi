@@ -7,13 +7,20 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver', 'kernels']
+__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver', 'kernels', 'bundled_scene', 'bundled_scenes']
 
 _ArrayLike = npt.ArrayLike
 _Points = npt.NDArray[np.float64]
 
 def kernels() -> str:
     """The kernel set this process computes with: "portable" or "avx2-fma"."""
+
+def bundled_scene(name: str) -> "Scene":
+    """The bundled scene `name` (a file stem of the repository's scenes/, e.g.
+    "hanging_cable"), found wherever the program runs; SceneError lists the names."""
+
+def bundled_scenes() -> list[str]:
+    """The names of the bundled scenes, sorted."""
 
 class SceneError(ValueError):
     """Bad input; `field` names the field (dotted path), `None` if no single one."""

@@ -10,6 +10,7 @@
 
 mod adaptivity;
 mod arrays;
+mod bundled;
 mod driver;
 mod errors;
 mod interrupt;
@@ -61,5 +62,7 @@ fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<system::StaticSolver>()?;
     m.add_class::<adaptivity::Adaptivity>()?;
     m.add_function(wrap_pyfunction!(kernels, m)?)?;
+    m.add_function(wrap_pyfunction!(bundled::bundled_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(bundled::bundled_scenes, m)?)?;
     Ok(())
 }

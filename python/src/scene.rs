@@ -39,7 +39,7 @@ impl Scene {
     /// A scene from a TOML file (a path: `str` or `os.PathLike`) or TOML text (a `str`
     /// with a newline or an `=`).
     #[staticmethod]
-    fn from_toml(source: &Bound<'_, PyAny>) -> PyResult<Self> {
+    pub(crate) fn from_toml(source: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = source.py();
         let interrupt = Interrupt::new();
         let path = match source.cast::<PyString>() {

@@ -212,3 +212,14 @@ def test_the_kernel_set_is_named_and_recorded_in_results():
     sim = hanging_cable().simulation()
     sim.step(3)
     assert sim.result()["kernels"] == splinerod.kernels()
+
+
+def test_bundled_scenes_are_the_repository_scenes():
+    names = splinerod.bundled_scenes()
+    assert names == sorted(p.stem for p in SCENES.glob("*.toml"))
+    for name in names:
+        text = (SCENES / f"{name}.toml").read_text(encoding="utf-8")
+        assert splinerod.bundled_scene(name).toml == text, name
+    with pytest.raises(splinerod.SceneError, match="hanging_cable") as caught:
+        splinerod.bundled_scene("hanging_cabel")
+    assert "hanging_cabel" in str(caught.value)

@@ -8,6 +8,7 @@ use crate::run::observe::Frame;
 use crate::Error;
 use nalgebra::Vector3;
 use splinerod_core::{Real, Rod};
+use splinerod_energies::Obstacle;
 
 /// Centreline samples per knot span.
 const SAMPLES_PER_SPAN: usize = 40;
@@ -112,10 +113,7 @@ impl View {
     /// Picture coordinates of a world point, px (x right, y down, origin top left).
     pub fn pixel(&self, p: &Vector3<Real>) -> (f64, f64) {
         let v = self.camera.project(p);
-        let (_, ah) = plot_area();
-        let x = 0.5 * f64::from(WIDTH) + (v[0] - self.centre[0]) * self.scale;
-        let y = MARGIN + 0.5 * ah - (v[1] - self.centre[1]) * self.scale;
-        (x, y)
+        self.view_pixel(v[0], v[1])
     }
 
     /// Metres per pixel.
@@ -130,6 +128,36 @@ impl View {
             return 0.0;
         }
         ((near - self.camera.project(p)[2]) / (near - far)).clamp(0.0, 1.0)
+    }
+
+    /// Picture coordinates (px) of the view coordinates `right`, `up` (m).
+    pub(crate) fn view_pixel(&self, right: Real, up: Real) -> (f64, f64) {
+        let (_, ah) = plot_area();
+        let x = 0.5 * f64::from(WIDTH) + (right - self.centre[0]) * self.scale;
+        let y = MARGIN + 0.5 * ah - (up - self.centre[1]) * self.scale;
+        (x, y)
+    }
+
+    /// The box of view coordinates `[right, up, toward]` (m) the picture shows: the
+    /// whole picture above the caption across, and the depth of the framed points.
+    pub(crate) fn view_box(&self) -> ([Real; 3], [Real; 3]) {
+        let (_, ah) = plot_area();
+        let half_w = 0.5 * f64::from(WIDTH) / self.scale;
+        let (top, bottom) = (
+            MARGIN + 0.5 * ah,
+            f64::from(HEIGHT) - CAPTION - MARGIN - 0.5 * ah,
+        );
+        let lo = [
+            self.centre[0] - half_w,
+            self.centre[1] - bottom / self.scale,
+            self.depth.0,
+        ];
+        let hi = [
+            self.centre[0] + half_w,
+            self.centre[1] + top / self.scale,
+            self.depth.1,
+        ];
+        (lo, hi)
     }
 
     pub(crate) fn px(&self, p: &Vector3<Real>) -> (i32, i32) {
@@ -201,6 +229,23 @@ pub(crate) fn framing_points(frame: &Frame<'_>) -> Result<Vec<Vector3<Real>>, Er
             .map(|p| Vector3::new(p.x, floor, p.z))
             .collect();
         points.extend(shadows);
+    }
+    // The spheres and capsules, where they are now.
+    for obstacle in super::scenery::obstacles_at(frame)? {
+        let mut ball = |c: Vector3<Real>, r: Real| {
+            for k in 0..3 {
+                let e = Vector3::ith(k, r);
+                points.extend([c + e, c - e]);
+            }
+        };
+        match obstacle {
+            Obstacle::Plane { .. } => {}
+            Obstacle::Sphere { centre, radius } => ball(centre, radius),
+            Obstacle::Capsule { a, b, radius } => {
+                ball(a, radius);
+                ball(b, radius);
+            }
+        }
     }
     Ok(points)
 }

@@ -1,5 +1,5 @@
 //! Outputs of a run, each an [`Observer`](crate::Observer): pictures (PNG/SVG frames
-//! and a GIF), ParaView files (VTK PolyData and a PVD collection), per-step statistics
+//! and a GIF, with the floor, obstacles and rod names), ParaView files (VTK PolyData and a PVD collection), per-step statistics
 //! (CSV), a progress bar, and the plotting used by the speed-vs-error report.
 
 pub mod camera;
@@ -7,5 +7,6 @@ pub mod picture;
 pub mod plot;
 pub mod progress;
 pub mod ribbon;
+mod scenery;
 pub mod stats;
 pub mod vtk;

@@ -1,13 +1,16 @@
 //! Pictures of the rod: the [`Pictures`] observer writes PNG frames (and SVG when
 //! asked, and an animated GIF) of the centreline as the run unfolds.
 //!
-//! Each frame shows the centreline drawn thick and densely sampled (40 samples per knot
+//! Each frame shows the centreline drawn thick (at least the rod's diameter, where the
+//! scene gives a `radius`) and densely sampled (40 samples per knot
 //! span; no line is drawn across a cut), its knot spans coloured alternately blue and
 //! orange so the knots are visible (as in Lenoir et al.'s fig. 4), optionally the
 //! control polygon and control points (thin, grey), the pins (black squares), the
 //! active grabs (red dot at the grabbed material point, red cross at the spring's
 //! target), on a rod with twist the material frame as a dark stripe winding around the
-//! centreline ([`super::ribbon`]), and a caption with time, step, control points and scale.
+//! centreline ([`super::ribbon`]), the floor and `[[obstacles]]` shaded light grey and
+//! outlined (`super::scenery`), each rod's name in a `[[rods]]` scene, and a caption
+//! with time, step, control points, rods or pieces, and scale.
 //!
 //! # Camera
 //! A [`Camera`] is an orthographic projection (`xy`, `xz`, `yz`) or an `oblique` view
@@ -21,7 +24,8 @@
 //!   of rest length `ℓ` stays inside the ellipsoid `|x − p| + |x − q| ≤ ℓ`; a free end
 //!   of rest length `ℓ` beyond an anchor `p` stays inside the ball `|x − p| ≤ ℓ`.
 //!   Under gravity only the parts of those regions not higher than the initial
-//!   configuration are used (a hanging rod does not rise above where it started).
+//!   configuration are used (a hanging rod does not rise above where it started);
+//! * the floor below all of these, and the spheres and capsules of `[[obstacles]]`.
 //!
 //! A rod without anchors may fall out of the picture. The framing keeps equal scales
 //! on both picture axes.
@@ -29,8 +33,9 @@
 pub use super::camera::{centreline, Camera, View};
 use super::camera::{framing_points, CAPTION, MARGIN};
 use super::plot::{write_images, Drawing, GifWriter, FONT, HEIGHT, WIDTH};
+use super::scenery::{self, Shape};
 use crate::run::observe::{Frame, Observer};
-use crate::{Error, RunResult, StepReport};
+use crate::{Error, RunResult, Scene, StepReport};
 use nalgebra::Vector3;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -43,6 +48,10 @@ const LINE_WIDTH: f64 = 5.0;
 const SPAN_COLOURS: [RGBColor; 2] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14)];
 /// Control polygon and control points.
 const GREY: RGBColor = RGBColor(150, 150, 150);
+/// The floor and obstacles.
+const SCENERY: RGBColor = RGBColor(228, 228, 228);
+/// Font size of the rods' names, px.
+const LABEL_FONT: f64 = 18.0;
 /// Grabs.
 const RED: RGBColor = RGBColor(214, 39, 40);
 /// The material frame's stripe (rods with twist), its offset from the centreline (px)
@@ -68,6 +77,10 @@ struct Sketch {
     grabs: Vec<((i32, i32), (i32, i32))>,
     caption: String,
     axes: Vec<(&'static str, (i32, i32))>,
+    /// The floor and obstacles, drawn under the rod.
+    scenery: Vec<Shape>,
+    /// Each rod's name and where it goes (`[[rods]]` scenes).
+    labels: Vec<scenery::Label>,
 }
 
 /// Lightens `c` towards white by `f` in [0, 1].
@@ -76,12 +89,32 @@ fn lighten(c: RGBColor, f: Real) -> RGBColor {
     RGBColor(mix(c.0), mix(c.1), mix(c.2))
 }
 
+/// The rod's cross-section radius at material coordinate `s`, m, where the scene gives
+/// one (`rod.radius`, or that of the `[[rods]]` entry holding `s`).
+fn radius_at(scene: &Scene, s: Real) -> Option<Real> {
+    let mut end = 0.0;
+    for rod in &scene.rods {
+        end += rod.rest_length;
+        if s < end {
+            return rod.radius;
+        }
+    }
+    match scene.rods.last() {
+        Some(rod) => rod.radius,
+        None => scene.rod.radius,
+    }
+}
+
 /// The centreline as strokes: one per span, or per segment in the oblique view (each
-/// shaded by its depth), drawn far to near.
-fn strokes(rod: &Rod, view: &View) -> Result<Vec<Stroke>, Error> {
+/// shaded by its depth), drawn far to near; as thick as the rod where its diameter
+/// (`radius` of the scene) is wider on the picture than the drawn line.
+fn strokes(rod: &Rod, view: &View, scene: &Scene) -> Result<Vec<Stroke>, Error> {
     let mut out = Vec::new();
-    for (i, span) in centreline(rod)?.iter().enumerate() {
+    let spans = splinerod_core::basis::spans(rod.basis());
+    for (i, (span, params)) in centreline(rod)?.iter().zip(spans).enumerate() {
         let colour = SPAN_COLOURS[i % 2];
+        let radius = radius_at(scene, 0.5 * (params.start + params.end)).unwrap_or(0.0);
+        let diameter = 2.0 * radius / view.metres_per_pixel();
         let pieces: Vec<&[Vector3<Real>]> = if view.camera == Camera::Oblique {
             span.windows(2).collect()
         } else {
@@ -93,7 +126,10 @@ fn strokes(rod: &Rod, view: &View) -> Result<Vec<Stroke>, Error> {
             out.push(Stroke {
                 points: piece.iter().map(|p| view.px(p)).collect(),
                 colour: lighten(colour, f),
-                width: (LINE_WIDTH * (1.0 - 0.6 * f)).round().max(1.0) as u32,
+                width: (LINE_WIDTH * (1.0 - 0.6 * f))
+                    .max(diameter)
+                    .round()
+                    .max(1.0) as u32,
                 farness: f,
             });
         }
@@ -119,6 +155,17 @@ fn control_polygon(rod: &Rod, view: &View) -> Vec<Vec<(i32, i32)>> {
     out
 }
 
+/// The caption's count of rods and pieces: "2 rods" for two rods, "3 pieces" for one
+/// rod cut once, "2 rods in 3 pieces", nothing for one whole rod.
+fn parts(rods: usize, pieces: usize) -> String {
+    match (rods, pieces) {
+        (1, p) if p <= 1 => String::new(),
+        (1, p) => format!("   {p} pieces"),
+        (r, p) if p <= r => format!("   {r} rods"),
+        (r, p) => format!("   {r} rods in {p} pieces"),
+    }
+}
+
 /// What frame `frame` shows through `view`.
 fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error> {
     let (system, rod) = (frame.system, &frame.system.rod);
@@ -130,10 +177,7 @@ fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error
         0 => format!("step {}", frame.step),
         n => format!("step {}/{n}", frame.step),
     };
-    let pieces = match rod.pieces() {
-        1 => String::new(),
-        n => format!("   {n} pieces"),
-    };
+    let pieces = parts(frame.scene.rods.len().max(1), rod.pieces());
     let caption = format!(
         "t = {:.4} s   {steps}   {} control points{pieces}   view {}   1 px = {:.3} mm",
         frame.time,
@@ -141,7 +185,7 @@ fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error
         view.camera.name(),
         view.metres_per_pixel() * 1e3,
     );
-    let mut strokes = strokes(rod, view)?;
+    let mut strokes = strokes(rod, view, frame.scene)?;
     if let Some(twist) = system.summary()?.twist {
         // The material frame: a dark stripe STRIPE_OFFSET px off the centreline.
         let offset = STRIPE_OFFSET * view.metres_per_pixel();
@@ -163,6 +207,8 @@ fn sketch(frame: &Frame<'_>, view: &View, polygon: bool) -> Result<Sketch, Error
         grabs,
         caption,
         axes: axes(view.camera),
+        scenery: scenery::shapes(frame, view)?,
+        labels: scenery::labels(frame, view)?,
     })
 }
 
@@ -177,6 +223,9 @@ impl Drawing for Sketch {
         raster: bool,
     ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
         area.fill(&WHITE)?;
+        for shape in &self.scenery {
+            draw_shape(area, shape)?;
+        }
         for line in &self.polygon {
             area.draw(&PathElement::new(line.clone(), GREY.stroke_width(1)))?;
         }
@@ -205,8 +254,51 @@ impl Drawing for Sketch {
             area.draw(&Cross::new(target, 7, RED.stroke_width(2)))?;
             area.draw(&Circle::new(point, 6, RED.filled()))?;
         }
+        for (name, point) in &self.labels {
+            let font = (FONT, LABEL_FONT).into_font().color(&BLACK);
+            let (corner, foot) = label_place(name, *point);
+            area.draw(&PathElement::new(vec![*point, foot], BLACK.stroke_width(1)))?;
+            area.draw(&Text::new(name.clone(), corner, font))?;
+        }
         caption(area, self)
     }
+}
+
+/// Where a rod's name beside `point` goes: the text's top-left corner and the end of
+/// the short line from `point` to it. Up and to the right, or to the left near the
+/// picture's right edge and below near its top (the width is estimated at 0.6 of the
+/// font size per character).
+fn label_place(name: &str, (x, y): (i32, i32)) -> ((i32, i32), (i32, i32)) {
+    let width = (0.6 * LABEL_FONT * name.chars().count() as f64).ceil() as i32;
+    let height = LABEL_FONT as i32;
+    let right = x + 10 + width < WIDTH as i32 - 4;
+    let up = y - 14 - height > 4;
+    let foot = (
+        if right { x + 8 } else { x - 8 },
+        if up { y - 8 } else { y + 8 },
+    );
+    let left = if right {
+        foot.0 + 2
+    } else {
+        foot.0 - 2 - width
+    };
+    let top = if up { foot.1 - 4 - height } else { foot.1 + 4 };
+    ((left, top), foot)
+}
+
+/// Light grey where the floor and obstacles are, outlined in grey.
+fn draw_shape<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    shape: &Shape,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (fill, outline) = match shape {
+        Shape::Solid { fill, edge } => (fill, edge),
+        Shape::Outline(outline) => (outline, outline),
+    };
+    if fill.len() >= 3 {
+        area.draw(&Polygon::new(fill.clone(), SCENERY.filled()))?;
+    }
+    area.draw(&PathElement::new(outline.clone(), GREY.stroke_width(2)))
 }
 
 /// The caption strip (blanked first: a falling piece may have strayed into it) and a

@@ -1,5 +1,8 @@
-//! The CLI's short human summary of a [`RunResult`].
+//! The CLI's short human summary of a [`RunResult`]: a line for what acts, none for
+//! what does not (an energy that is exactly zero at the end, contact that never
+//! touched).
 
+use crate::run::runner::ContactStats;
 use crate::RunResult;
 
 impl RunResult {
@@ -17,12 +20,8 @@ impl RunResult {
             let us = self.median_step_seconds * 1e6;
             out.push_str(&format!("median step: {us:.1} µs\n"));
         }
-        let energies: Vec<String> = self
-            .energy
-            .iter()
-            .map(|(k, v)| format!("{k} {v:.6e}"))
-            .collect();
-        out.push_str(&format!("energy (J): {}\n", energies.join(", ")));
+        out.push_str(&self.energy_line());
+        out.push_str(&self.ensemble_line());
         if self.control_points_history.len() > 1 {
             let counts = self.control_points_history.iter().map(|h| h[1] as usize);
             let (lo, hi) = counts.fold((usize::MAX, 0), |(a, b), n| (a.min(n), b.max(n)));
@@ -46,18 +45,7 @@ impl RunResult {
             }
         }
         if let Some(c) = &self.contact {
-            let ratio = c
-                .min_clearance_ratio
-                .map_or("-".into(), |r| format!("{r:.4}"));
-            out.push_str(&format!(
-                "contact: min clearance {ratio}, at most {} pairs",
-                c.max_pairs
-            ));
-            if c.max_obstacle_contacts > 0 {
-                let n = c.max_obstacle_contacts;
-                out.push_str(&format!(", {n} points on the floor and obstacles"));
-            }
-            out.push('\n');
+            out.push_str(&self.contact_line(c));
         }
         if self.solver.unconverged_steps > 0 {
             out.push_str(&format!(
@@ -80,5 +68,72 @@ impl RunResult {
             ));
         }
         out
+    }
+
+    /// The final energies that are not exactly zero (a term that does nothing at the end,
+    /// such as a load ramped to zero, is left out), naming the member they belong to in
+    /// an ensemble.
+    fn energy_line(&self) -> String {
+        let acting: Vec<String> = self
+            .energy
+            .iter()
+            .filter(|(_, v)| **v != 0.0)
+            .map(|(k, v)| format!("{k} {v:.6e}"))
+            .collect();
+        let whose = match self.ensemble.first() {
+            Some(m) => format!(" of member {}", m.index),
+            None => String::new(),
+        };
+        match acting.is_empty() {
+            true => format!("energy (J){whose}: every term 0\n"),
+            false => format!("energy (J){whose}: {}\n", acting.join(", ")),
+        }
+    }
+
+    /// For an ensemble: how many members ran and the spread of their final sag and total
+    /// energy (the JSON's `ensemble` has each member's); empty otherwise.
+    fn ensemble_line(&self) -> String {
+        let (Some(first), Some(last)) = (self.ensemble.first(), self.ensemble.last()) else {
+            return String::new();
+        };
+        let range = |f: &dyn Fn(&crate::run::ensemble::MemberSummary) -> f64| {
+            let values = self.ensemble.iter().map(f);
+            values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+        };
+        let (sag_lo, sag_hi) = range(&|m| m.sag);
+        let (e_lo, e_hi) = range(&|m| m.energy.values().sum());
+        format!(
+            "ensemble: {} members ({} to {}), sag {sag_lo:.4e} to {sag_hi:.4e} m, \
+             total energy {e_lo:.6e} to {e_hi:.6e} J\n",
+            self.ensemble.len(),
+            first.index,
+            last.index,
+        )
+    }
+
+    /// What touched: pairs of strands, and points against the floor or obstacles; empty
+    /// when nothing came within the penalty's reach.
+    fn contact_line(&self, c: &ContactStats) -> String {
+        let mut parts = Vec::new();
+        if let Some(r) = c.min_clearance_ratio {
+            parts.push(format!("min clearance ratio {r:.4}"));
+        }
+        if c.max_pairs > 0 {
+            parts.push(format!("at most {} pairs of strands", c.max_pairs));
+        }
+        if c.max_obstacle_contacts > 0 {
+            let what = match self.obstacle_forces.is_empty() {
+                true => "the floor",
+                false => "the floor or an obstacle",
+            };
+            let n = c.max_obstacle_contacts;
+            parts.push(format!("at most {n} points against {what}"));
+        }
+        match parts.is_empty() {
+            true => String::new(),
+            false => format!("contact: {}\n", parts.join(", ")),
+        }
     }
 }
