@@ -53,6 +53,10 @@ pub const SCENES: &[(&str, &str)] = &[
         "ropes_crossing",
         include_str!("../scenes/ropes_crossing.toml"),
     ),
+    (
+        "ropes_crossing_pinned",
+        include_str!("../scenes/ropes_crossing_pinned.toml"),
+    ),
     ("rubber_band", include_str!("../scenes/rubber_band.toml")),
     (
         "string_midpoint",
