@@ -67,4 +67,13 @@ impl Adaptivity {
         self.spec.validate(initial).py_err(py)?;
         self.spec.adapter(rest_length, initial).map(Some).py_err(py)
     }
+
+    /// What `"auto"` stretching reads from the adapter of a rod of `rest_length` m: the
+    /// most control points it allows and the error it aims at.
+    pub fn auto_inputs(&self, rest_length: Real) -> (usize, Real) {
+        (
+            self.spec.max_control_points,
+            self.spec.aimed_error(rest_length),
+        )
+    }
 }

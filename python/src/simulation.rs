@@ -127,13 +127,18 @@ impl Simulation {
                     return Err(scene_error(py, Some("dt"), message));
                 }
             };
-            let system = system.build(py)?;
-            let (length, initial) = (system.rod.material().rest_length, system.rod.len());
-            let mut sim = splinerod::Simulation::new(system, integrator);
-            if let Some(a) = adaptivity {
-                if let Some(adapter) = a.adapter(py, length, initial)? {
-                    sim = sim.with_adapter(adapter);
-                }
+            let (length, initial) = (system.rest_length(), system.control_points());
+            let adapter = match &adaptivity {
+                Some(a) => a.adapter(py, length, initial)?,
+                None => None,
+            };
+            let (cap, aimed) = match (&adaptivity, &adapter) {
+                (Some(a), Some(_)) => a.auto_inputs(length),
+                _ => (initial, 0.0),
+            };
+            let mut sim = splinerod::Simulation::new(system.build(py, cap, aimed)?, integrator);
+            if let Some(adapter) = adapter {
+                sim = sim.with_adapter(adapter);
             }
             if error_estimate {
                 sim = sim.estimate_errors();

@@ -18,8 +18,9 @@ pub enum EnergySpec {
     Stretching {
         /// EA, N; `None`: inextensible.
         stiffness: Option<Real>,
-        /// Strain formulation.
-        formulation: splinerod::StretchFormulation,
+        /// Strain formulation; `None`: `"auto"` (the scene's default, resolved when
+        /// the system is built, [`RodSystem::build`]).
+        formulation: Option<splinerod::StretchFormulation>,
         /// At rest in the rod's initial shape instead of arclength.
         rest_initial: bool,
     },
@@ -36,10 +37,11 @@ pub enum EnergySpec {
 }
 
 impl EnergySpec {
-    /// The Rust energy for `rod`.
+    /// The Rust energy for `rod`, `auto` the form `"auto"` stretching takes.
     fn build(
         &self,
         rod: &splinerod::Rod,
+        auto: splinerod::StretchFormulation,
     ) -> Result<Box<dyn RustEnergy>, splinerod::core::CoreError> {
         use splinerod::energies as e;
         Ok(match *self {
@@ -55,7 +57,7 @@ impl EnergySpec {
                     true => e::Stretching::with_rest_shape(k, rod)?,
                     false => e::Stretching::new(k)?,
                 };
-                s.formulation = formulation;
+                s.formulation = formulation.unwrap_or(auto);
                 Box::new(s)
             }
             Self::Bending(k) => Box::new(e::Bending::new(k)?),
@@ -91,8 +93,10 @@ macro_rules! energy_class {
 
 energy_class!(
     /// Green–Lagrange stretching, EA in N (`Stretching.inextensible()`: an exactly
-    /// inextensible rod). `formulation`: "mixed" (default), "mixed-consistent",
-    /// "pointwise"; `rest="initial"`: at rest in the rod's initial shape.
+    /// inextensible rod). `formulation`: "auto" (default: chosen from the strain the
+    /// system puts on the rod, as a scene's `rod.stretch_formulation = "auto"`),
+    /// "mixed", "mixed-consistent", "pointwise"; `rest="initial"`: at rest in the rod's
+    /// initial shape.
     Stretching
 );
 energy_class!(
@@ -136,7 +140,7 @@ fn positive(py: Python<'_>, field: &str, v: Real) -> PyResult<Real> {
 #[pymethods]
 impl Stretching {
     #[new]
-    #[pyo3(signature = (stiffness, formulation = "mixed", rest = "arclength"))]
+    #[pyo3(signature = (stiffness, formulation = "auto", rest = "arclength"))]
     fn new(
         py: Python<'_>,
         stiffness: Real,
@@ -145,11 +149,12 @@ impl Stretching {
     ) -> PyResult<PyClassInitializer<Self>> {
         use splinerod::StretchFormulation as F;
         let formulation = match formulation {
-            "mixed" => F::Mixed,
-            "mixed-consistent" => F::MixedConsistent,
-            "pointwise" => F::Pointwise,
+            "auto" => None,
+            "mixed" => Some(F::Mixed),
+            "mixed-consistent" => Some(F::MixedConsistent),
+            "pointwise" => Some(F::Pointwise),
             other => {
-                let message = format!("`formulation` = {other:?}: expected \"mixed\", \"mixed-consistent\" or \"pointwise\"");
+                let message = format!("`formulation` = {other:?}: expected \"auto\", \"mixed\", \"mixed-consistent\" or \"pointwise\"");
                 return Err(scene_error(py, Some("formulation"), message));
             }
         };
@@ -175,7 +180,7 @@ impl Stretching {
     fn inextensible(py: Python<'_>) -> PyResult<Py<Self>> {
         let spec = EnergySpec::Stretching {
             stiffness: None,
-            formulation: splinerod::StretchFormulation::Mixed,
+            formulation: Some(splinerod::StretchFormulation::Mixed),
             rest_initial: false,
         };
         Py::new(py, energy(spec).add_subclass(Self))
@@ -288,14 +293,86 @@ impl RodSystem {
 }
 
 impl RodSystem {
-    /// The Rust system (energies made for its rod).
-    pub fn build(&self, py: Python<'_>) -> PyResult<splinerod::RodSystem> {
+    /// The rod's rest length, m.
+    pub fn rest_length(&self) -> Real {
+        self.rod.material().rest_length
+    }
+
+    /// The rod's number of control points.
+    pub fn control_points(&self) -> usize {
+        self.rod.len()
+    }
+
+    /// The Rust system (energies made for its rod); `"auto"` stretching resolved for
+    /// a run of at most `control_points` control points that aims at `aimed_error` m
+    /// (an adaptive run's tolerance, else 0).
+    pub fn build(
+        &self,
+        py: Python<'_>,
+        control_points: usize,
+        aimed_error: Real,
+    ) -> PyResult<splinerod::RodSystem> {
+        let auto = self
+            .auto_formulation(control_points, aimed_error)
+            .py_err(py)?;
         let mut system = splinerod::RodSystem::new(self.rod.clone());
         for spec in &self.energies {
-            system.energies.push(spec.build(&self.rod).py_err(py)?);
+            system
+                .energies
+                .push(spec.build(&self.rod, auto).py_err(py)?);
         }
         system.pins.clone_from(&self.pins);
         Ok(system)
+    }
+
+    /// The form `"auto"` stretching takes ([`splinerod::StretchFormulation::auto`]), from
+    /// the same strain scale as a scene's: weight, point forces and springs over `EA`,
+    /// the stretch between fixed pins and the start's own strain (module docs of the
+    /// scene's `auto_form`). The largest `EA` of the system's stretching decides.
+    fn auto_formulation(
+        &self,
+        control_points: usize,
+        aimed_error: Real,
+    ) -> Result<splinerod::StretchFormulation, splinerod::core::CoreError> {
+        use splinerod::energies::AutoInputs;
+        let mut ea: Real = 0.0;
+        let (mut loads, mut start) = (0.0, (0.0, 0.0));
+        let material = self.rod.material();
+        for spec in &self.energies {
+            match *spec {
+                EnergySpec::Stretching {
+                    stiffness: Some(k),
+                    rest_initial,
+                    ..
+                } => {
+                    ea = ea.max(k);
+                    if !rest_initial {
+                        start = AutoInputs::start_strains(&self.rod);
+                    }
+                }
+                EnergySpec::Gravity(g) => {
+                    loads += material.linear_density * g.norm() * material.rest_length
+                }
+                EnergySpec::PointForce(_, f) => loads += f.norm(),
+                EnergySpec::PointSpring(at, target, k) => {
+                    loads += k * (target - self.rod.point(at)?).norm()
+                }
+                _ => {}
+            }
+        }
+        let mut held: Vec<_> = (self.pins.iter())
+            .filter(|p| p.slides_along.is_none() && !p.tangent)
+            .map(|p| (p.at, vec![p.position]))
+            .collect();
+        let loads = if ea > 0.0 { loads / ea } else { 0.0 };
+        let strain = start.0.max(loads).max(AutoInputs::held_strain(&mut held));
+        Ok(splinerod::StretchFormulation::auto(AutoInputs {
+            strain,
+            compression: start.1,
+            control_points: control_points.max(self.rod.len()),
+            length: material.rest_length,
+            model_error: aimed_error,
+        }))
     }
 }
 

@@ -102,3 +102,26 @@ def test_formulations_agree_on_the_elastic_catenary(formulation):
     sim = splinerod.Simulation(system, splinerod.StaticSolver())
     sim.run()
     assert abs(-sim.positions(0.5)[1] - 0.268663) < 2e-6
+
+
+def test_a_cable_built_in_code_takes_the_scenes_default_model():
+    """`Stretching(EA)` without a formulation resolves "auto" as a scene does: the cable
+    built in code and the bundled scene with the same fields move alike."""
+    scene = splinerod.bundled_scene("hanging_cable")
+    from_scene = scene.simulation()
+    material = splinerod.Material(1.0, 0.1)
+    basis = splinerod.BSplineSpace.clamped_uniform(3, 16, 1.0)
+    rod = splinerod.Rod.straight(material, basis, [0, 0, 0], [0.8, 0, 0])
+    rod.damping = 2.0
+    pins = [splinerod.Pin.here(rod, 0.0), splinerod.Pin.here(rod, 1.0)]
+    system = splinerod.RodSystem(rod, [splinerod.Stretching(100.0), splinerod.Gravity()], pins)
+    in_code = splinerod.Simulation(system, splinerod.ImplicitEuler(), dt=from_scene.dt)
+    from_scene.run(until=0.5)
+    in_code.run(until=0.5)
+    s = np.linspace(0.0, 1.0, 21)
+    assert np.abs(in_code.positions(s) - from_scene.positions(s)).max() < 1e-9
+    # The lumped form moves differently (that is what the choice decides).
+    lumped = splinerod.RodSystem(rod, [splinerod.Stretching(100.0, "mixed"), splinerod.Gravity()], pins)
+    other = splinerod.Simulation(lumped, splinerod.ImplicitEuler(), dt=from_scene.dt)
+    other.run(until=0.5)
+    assert np.abs(other.positions(s) - from_scene.positions(s)).max() > 1e-7

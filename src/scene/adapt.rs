@@ -140,6 +140,16 @@ impl AdaptivitySpec {
         self.tolerance
             .unwrap_or(DEFAULT_RELATIVE_TOLERANCE * rest_length)
     }
+
+    /// The error a run with this adapter aims at, m: the tolerance of a tolerance-driven
+    /// adapter, 0 for the curvature thresholds (what `"auto"` stretching may spend,
+    /// [`splinerod_energies::AutoInputs::model_error`]).
+    pub fn aimed_error(&self, rest_length: f64) -> f64 {
+        match self.insert_threshold.is_none() && self.remove_threshold.is_none() {
+            true => self.tolerance_for(rest_length),
+            false => 0.0,
+        }
+    }
 }
 
 /// Default error tolerance as a fraction of the rest length.

@@ -79,35 +79,19 @@ impl Scene {
             _ => 0.0,
         };
         let adaptive = match &self.adaptivity {
-            Some(a) if a.insert_threshold.is_none() && a.remove_threshold.is_none() => {
-                a.tolerance_for(self.rod.rest_length)
-            }
-            _ => 0.0,
+            Some(a) => a.aimed_error(self.rod.rest_length),
+            None => 0.0,
         };
         contact.max(adaptive)
     }
 
-    /// The largest tensile and compressive Green–Lagrange strain of the start at the
-    /// rod's quadrature points (both ≥ 0; zero for an initial curve taken as the rest
-    /// shape).
+    /// The largest tensile and compressive Green–Lagrange strain of the start
+    /// ([`AutoInputs::start_strains`]; zero for an initial curve taken as the rest shape).
     fn start_strain(&self, rod: &Rod) -> (Real, Real) {
-        if self.rod.rest_shape == RestShape::Initial {
-            return (0.0, 0.0);
+        match self.rod.rest_shape {
+            RestShape::Initial => (0.0, 0.0),
+            _ => AutoInputs::start_strains(rod),
         }
-        let (mut tension, mut compression): (Real, Real) = (0.0, 0.0);
-        for qp in rod.quadrature().walk() {
-            let c1 = qp
-                .d1
-                .iter()
-                .enumerate()
-                .fold(Vector3::zeros(), |acc, (a, &w)| {
-                    acc + rod.positions[qp.first + a] * w
-                });
-            let strain = 0.5 * (c1.norm_squared() - 1.0);
-            tension = tension.max(strain);
-            compression = compression.max(-strain);
-        }
-        (tension, compression)
     }
 
     /// The loads' strain scale: weight, loads and grabs over `EA` (module docs).
@@ -145,19 +129,6 @@ impl Scene {
             }
             pins.push((spec.at * l, places));
         }
-        pins.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut strain: Real = 0.0;
-        for pair in pins.windows(2) {
-            let rest = pair[1].0 - pair[0].0;
-            if rest <= 0.0 {
-                continue;
-            }
-            for p in &pair[0].1 {
-                for q in &pair[1].1 {
-                    strain = strain.max((p - q).norm() / rest - 1.0);
-                }
-            }
-        }
-        Ok(strain)
+        Ok(AutoInputs::held_strain(&mut pins))
     }
 }

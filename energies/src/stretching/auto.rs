@@ -1,7 +1,8 @@
 //! The rule behind a scene's `"auto"` stretching: which mixed form a rod needs.
 
 use super::StretchFormulation;
-use splinerod_core::Real;
+use nalgebra::Vector3;
+use splinerod_core::{Real, Rod};
 
 /// The lumped form's extra error on a rod whose strain varies on the scale `ε` is about
 /// this times `ε L / n²` (m; measured on the catenary, L = 1 m, EA = 100 N: 2.7e-6 m at
@@ -57,5 +58,48 @@ impl StretchFormulation {
         } else {
             Self::Mixed
         }
+    }
+}
+
+impl AutoInputs {
+    /// The largest tensile and compressive Green–Lagrange strain of `rod`'s current
+    /// curve against arclength at its quadrature points, `(tension, compression)`, both
+    /// ≥ 0: what the start puts on a rod at rest when `s` is arclength.
+    pub fn start_strains(rod: &Rod) -> (Real, Real) {
+        let (mut tension, mut compression): (Real, Real) = (0.0, 0.0);
+        for qp in rod.quadrature().walk() {
+            let c1 = qp
+                .d1
+                .iter()
+                .enumerate()
+                .fold(Vector3::zeros(), |acc, (a, &w)| {
+                    acc + rod.positions[qp.first + a] * w
+                });
+            let strain = 0.5 * (c1.norm_squared() - 1.0);
+            tension = tension.max(strain);
+            compression = compression.max(-strain);
+        }
+        (tension, compression)
+    }
+
+    /// The largest stretch held points impose on the rod between them, ≥ 0: `held` lists
+    /// each point's material coordinate (m) with every place it is held at (its start
+    /// and keyframes); for consecutive points along the rod, the largest distance
+    /// between their places over their rest distance, minus one.
+    pub fn held_strain(held: &mut [(Real, Vec<Vector3<Real>>)]) -> Real {
+        held.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut strain: Real = 0.0;
+        for pair in held.windows(2) {
+            let rest = pair[1].0 - pair[0].0;
+            if rest <= 0.0 {
+                continue;
+            }
+            for p in &pair[0].1 {
+                for q in &pair[1].1 {
+                    strain = strain.max((p - q).norm() / rest - 1.0);
+                }
+            }
+        }
+        strain
     }
 }
