@@ -57,6 +57,12 @@ impl RunResult {
                 let n = c.max_obstacle_contacts;
                 out.push_str(&format!(", {n} points on the floor and obstacles"));
             }
+            if let Some(k) = c.stiffness_used {
+                out.push_str(&format!(", stiffness {k:.3e} N/m"));
+            }
+            if let (Some(g), Some(t)) = (c.end_gap, c.tolerance) {
+                out.push_str(&format!(", end gap {g:.3e} m (tolerance {t:.3e} m)"));
+            }
             out.push('\n');
         }
         if self.solver.unconverged_steps > 0 {
