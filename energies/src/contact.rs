@@ -49,6 +49,7 @@
 mod as_energy;
 mod assemble;
 mod barrier;
+pub mod close;
 pub mod detect;
 mod friction;
 pub mod obstacle;
