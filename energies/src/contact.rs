@@ -210,8 +210,10 @@ pub struct Contact {
     motion: obstacle::Motion,
     /// Radii per segment of a joined rod (see [`Contact::with_segment_radii`]).
     radii: SegmentRadii,
-    /// The smallest gap measured at the last stiffness update ([`stiffness`]).
-    adapted_at: Option<Real>,
+    /// The state of the last stiffness update ([`stiffness`]): the smallest gap
+    /// measured and a fingerprint of the positions, so a retried step does not update
+    /// again.
+    adapted_at: Option<[Real; 2]>,
 }
 
 /// The radius of each segment of a joined rod: `starts[k]` is where segment `k` starts

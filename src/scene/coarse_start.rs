@@ -105,7 +105,7 @@ impl Scene {
             if self.refine_around(&mut rod, &places, MIN_SPAN_RADII * radius, budget)? {
                 continue;
             }
-            let fixed = self.pinned_points(&rod)?;
+            let fixed = self.pinned_points(&rod);
             push(&mut rod, &places, 0.5 * layer, &fixed);
         }
         Ok(None)
@@ -146,11 +146,20 @@ impl Scene {
 
     /// Which control points carry a pin (its basis row at the pinned point, and the
     /// next one inwards for a clamp).
-    fn pinned_points(&self, rod: &Rod) -> Result<Vec<bool>, Error> {
+    fn pinned_points(&self, rod: &Rod) -> Vec<bool> {
         let mut fixed = vec![false; rod.len()];
         let l = rod.material().rest_length;
+        let (start, end) = rod.basis().domain();
         for pin in &self.pins {
-            let b = rod.basis_at(pin.at * l)?;
+            // A closed rod's `at = 1` is its seam, `s = 0`.
+            let s = (pin.at * l).clamp(start, end);
+            let Ok(b) = rod.basis_at(if s >= end && rod.is_closed() {
+                start
+            } else {
+                s
+            }) else {
+                continue;
+            };
             for k in 0..b.order {
                 let clamp = pin.clamp && (k == 1 || k + 2 == b.order);
                 if b.value[k] != 0.0 || clamp {
@@ -158,7 +167,7 @@ impl Scene {
                 }
             }
         }
-        Ok(fixed)
+        fixed
     }
 }
 

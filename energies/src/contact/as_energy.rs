@@ -48,7 +48,7 @@ impl Energy for Contact {
         detector.save_state(out);
         if self.params.law != ContactLaw::Penalty {
             out.real(self.penalty.k);
-            out.real(self.adapted_at.unwrap_or(Real::NAN));
+            out.reals(&self.adapted_at.unwrap_or([Real::NAN; 2]));
         }
     }
 
@@ -57,8 +57,13 @@ impl Energy for Contact {
         detector.load_state(rod, input)?;
         if self.params.law != ContactLaw::Penalty {
             self.set_stiffness(input.real()?)?;
-            let at = input.real()?;
-            self.adapted_at = (!at.is_nan()).then_some(at);
+            let mut at = Vec::new();
+            input.reals_into(&mut at)?;
+            self.adapted_at = match at[..] {
+                [g, f] if !f.is_nan() => Some([g, f]),
+                [_, _] => None,
+                _ => return Err(CoreError::StateMismatch("a contact stiffness state")),
+            };
         }
         Ok(())
     }

@@ -47,9 +47,11 @@
 //! **Between updates** the stiffness is constant, so each Newton solve minimises one
 //! energy; an update changes the energy between steps (a dissipative scheme absorbs the
 //! jump, like a multiplier update). A retried sub-step starts from the same state and
-//! does not update again (the measured gap is remembered). Friction's frozen normal
+//! does not update again (the measured gap and a fingerprint of the positions are
+//! remembered). Friction's frozen normal
 //! forces are taken after the update. Checkpoints save the stiffness reached and the
-//! last measured gap, and the error estimator's finer copy takes the stiffness as it is.
+//! last update's state, and the error estimator's finer copy takes the stiffness as it
+//! is.
 
 use super::barrier::unit_slope;
 use super::Contact;
@@ -118,6 +120,15 @@ fn barrier_update(kappa: Real, k0: Real, g: Option<Real>, tau: Real) -> Real {
     }
 }
 
+/// A fingerprint of the rod's positions: equal for a step retried from the same state
+/// (bit for bit), different once the rod has moved.
+fn fingerprint(rod: &Rod) -> Real {
+    let sum = |(i, q): (usize, &nalgebra::Vector3<Real>)| {
+        (q.x + 1.7 * q.y + 2.9 * q.z) * (1.0 + 1e-3 * i as Real)
+    };
+    rod.positions.iter().enumerate().map(sum).sum()
+}
+
 impl Contact {
     /// The smallest gap (m, negative: overlap) over every sample pair and surface point
     /// within reach at the rod's positions; `None` without contacts.
@@ -146,17 +157,17 @@ impl Contact {
     }
 
     /// One update of the stiffness at the rod's positions (module docs), unless the
-    /// last one measured the same smallest gap (a retried step). Returns the stiffness.
+    /// last one was made at the same state (a retried step). Returns the stiffness.
     pub fn adapt_stiffness(&mut self, rod: &Rod) -> Result<Real, CoreError> {
         if self.params.law == ContactLaw::Penalty {
             return Ok(self.penalty.k);
         }
         let g = self.smallest_gap(rod)?;
-        let measured = g.unwrap_or(Real::INFINITY);
-        if self.adapted_at == Some(measured) || measured.is_nan() {
+        let state = [g.unwrap_or(Real::INFINITY), fingerprint(rod)];
+        if self.adapted_at == Some(state) || state[0].is_nan() {
             return Ok(self.penalty.k);
         }
-        self.adapted_at = Some(measured);
+        self.adapted_at = Some(state);
         let (k, k0, delta) = (self.penalty.k, self.params.stiffness, self.params.onset);
         self.penalty.k = match self.params.law {
             ContactLaw::AdaptivePenalty { tolerance } => {
@@ -228,6 +239,40 @@ mod tests {
             k = next;
         }
         assert_eq!(k, 1e4);
+    }
+
+    /// A straight 1 m rod of radius 1 cm lying `depth` m into the floor `y = 0`.
+    fn sunk_rod(depth: f64) -> splinerod_core::Rod {
+        use nalgebra::Vector3;
+        use splinerod_core::{BSplineSpace, Material, Rod};
+        let material = Material {
+            rest_length: 1.0,
+            linear_density: 0.1,
+        };
+        let basis = BSplineSpace::clamped_uniform(3, 8, 1.0).expect("basis");
+        let y = 0.01 - depth;
+        let (a, b) = (Vector3::new(0.0, y, 0.0), Vector3::new(1.0, y, 0.0));
+        Rod::straight(material, Box::new(basis), a, b).expect("rod")
+    }
+
+    #[test]
+    fn a_retried_step_does_not_update_again_and_a_free_rod_relaxes() {
+        use crate::{Contact, ContactParams};
+        let params = ContactParams::adaptive(0.01, 1e3, 5e-4).expect("params");
+        let mut c = Contact::new(params.with_floor(0.0).expect("floor")).expect("contact");
+        let deep = sunk_rod(2e-3);
+        let once = c.adapt_stiffness(&deep).expect("update");
+        assert!(once > 1e3, "{once}");
+        // The same state again (a retried sub-step): no second update.
+        assert_eq!(c.adapt_stiffness(&deep).expect("update"), once);
+        // Lifted off the floor, it relaxes at every step, by at most RELAX.
+        let (mut k, mut free) = (once, sunk_rod(-0.1));
+        for step in 0..3 {
+            free.positions[0].x = 1e-6 * step as f64;
+            let next = c.adapt_stiffness(&free).expect("update");
+            assert!(next < k && next >= RELAX * k, "{next} after {k}");
+            k = next;
+        }
     }
 
     #[test]
