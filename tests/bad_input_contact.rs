@@ -199,13 +199,30 @@ fn contact_without_radius() {
 // ---------------------------------------------------------------- [contact]
 
 #[test]
-fn bad_stiffness() {
+fn bad_stiffness_and_tolerance() {
     assert_needs_positive_in(BASE, "stiffness", "contact.stiffness");
-    let message = rejected(&without_in(BASE, "stiffness"));
-    assert!(message.contains("missing field"), "{message}");
-    assert_field(&message, "contact.stiffness");
     let message = rejected(&set_in(BASE, "stiffness", "\"stiff\""));
     assert_field(&message, "contact.stiffness");
+    // Without a stiffness: the barrier (#46), with or without a tolerance.
+    let barrier = without_in(BASE, "stiffness");
+    accepted(&barrier);
+    let tolerance = with_line_in(&barrier, "[contact]", "tolerance = 1e-4");
+    accepted(&tolerance);
+    assert_needs_positive_in(&tolerance, "tolerance", "contact.tolerance");
+    let message = rejected(&set_in(&tolerance, "tolerance", "\"tight\""));
+    assert_field(&message, "contact.tolerance");
+    // The barrier acts within the tolerance: an onset without a stiffness is named.
+    assert_field(
+        &rejected(&with_line_in(&barrier, "[contact]", "onset = 1e-3")),
+        "contact.onset",
+    );
+    // With both a stiffness and a tolerance, the onset may not exceed the tolerance.
+    let both = with_line_in(BASE, "[contact]", "tolerance = 1e-4");
+    accepted(&with_line_in(&both, "[contact]", "onset = 1e-4"));
+    assert_field(
+        &rejected(&with_line_in(&both, "[contact]", "onset = 1e-3")),
+        "contact.onset",
+    );
 }
 
 #[test]

@@ -244,6 +244,31 @@ fn contact_with_friction_resumes_exactly() {
     resumes_exactly("knot", &knot, &[120, 299, 450]);
 }
 
+/// The barrier (no `stiffness`) and the adaptive penalty (`stiffness` and `tolerance`)
+/// change their stiffness between steps: checkpoints keep it (#46).
+#[test]
+fn adapting_contact_stiffnesses_resume_exactly() {
+    let d = dir("adapting");
+    let barrier = variant(
+        &d,
+        "rope_pileup.toml",
+        &[
+            ("duration = 2.5", "duration = 0.6"),
+            ("stiffness = 1e5\n", ""),
+        ],
+    );
+    resumes_exactly("barrier", &barrier, &[50, 157, 250]);
+    let adaptive = variant(
+        &d,
+        "knot_tying_adaptive.toml",
+        &[
+            ("duration = 3.0", "duration = 0.6"),
+            ("stiffness = 1e4", "stiffness = 1e4\ntolerance = 1.5e-4"),
+        ],
+    );
+    resumes_exactly("adaptive", &adaptive, &[120, 299, 450]);
+}
+
 #[test]
 fn ensembles_resume_exactly() {
     let d = dir("ensemble");

@@ -17,9 +17,9 @@
 //! \\(n = (C(s_a) - C(s_b))/d\\), each pair adds \\(\tfrac{w_a w_b}{(2r)^2} \phi'(g)\,
 //! u_i\, n\\) to the gradient (exact) and
 //! \\(\tfrac{w_a w_b}{(2r)^2} \phi''(g)\, u u^T \otimes n n^T\\) to the Hessian for both
-//! [`HessianKind`]s: positive semi-definite, without the negative curvature term
+//! [`HessianKind`](splinerod_core::HessianKind)s: positive semi-definite, without the negative curvature term
 //! \\(\phi'/d\, (I - n n^T)\\). It couples control points far apart on the rod, so it
-//! is assembled with [`BlockBanded::add_coupling`]. A crossing with overlap `p` resists
+//! is assembled with [`BlockBanded::add_coupling`](splinerod_core::BlockBanded::add_coupling). A crossing with overlap `p` resists
 //! with a force of about \\(\pi k p^2 / (2r)\\) (the patch where the strands overlap
 //! grows with `p`).
 //!
@@ -31,6 +31,12 @@
 //! **Obstacles** (module [`obstacle`]): rigid planes, spheres and capsules, with the
 //! floor's penalty per unit length on the detection's material samples.
 //!
+//! **Laws and stiffness** (modules `barrier` and [`stiffness`]): the penalty \\(\phi\\)
+//! of a fixed stiffness, the same penalty with its stiffness raised between steps so
+//! that the deepest contact stays within a gap tolerance, or a log barrier that holds
+//! every contact at a gap inside the tolerance whatever its load
+//! ([`ContactLaw`]; the scenes' default is the barrier).
+//!
 //! **Friction** (coefficient `μ`, see the `friction` module): Coulomb friction as a
 //! lagged dissipative potential, frozen at [`Contact::begin_step`], on every contact:
 //! self, floor and obstacles.
@@ -40,7 +46,10 @@
 //! \\(\pi r\\), the default), which ignores loops shorter than `exclusion + 2 segment`
 //! (about `7.3 r` by default: a loop of radius 1.2 r, tighter than the rod allows).
 
+mod as_energy;
 mod assemble;
+mod barrier;
+pub mod close;
 pub mod detect;
 mod friction;
 pub mod obstacle;
@@ -48,9 +57,10 @@ mod pair;
 mod penalty;
 mod sample_sums;
 mod skin;
+pub mod stiffness;
+mod summary;
 mod surface;
 
-use crate::{Energy, EnergySummary};
 use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
 use nalgebra::Vector3;
@@ -59,21 +69,25 @@ use pair::pair_rows;
 use penalty::Penalty;
 use splinerod_core::basis::MAX_ORDER;
 use splinerod_core::rod::{non_negative, positive};
-use splinerod_core::{
-    BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod, SavedState, StateReader,
-};
+use splinerod_core::{CoreError, Real, Rod};
 use std::sync::{Mutex, MutexGuard};
+pub use stiffness::ContactLaw;
+pub use summary::ContactSummary;
 
 /// Settings of [`Contact`]. All lengths in m.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactParams {
     /// Rod radius `r` (> 0): centre lines are kept `2r` apart.
     pub radius: Real,
-    /// Penalty stiffness `k`, N/m (> 0).
+    /// Penalty stiffness `k`, N/m (> 0); the barrier's `κ` with [`ContactLaw::Barrier`];
+    /// the first stiffness of an adapting law.
     pub stiffness: Real,
     /// Onset layer `δ` (> 0): the penalty starts at gap `δ` and reaches stiffness `k` at
-    /// gap 0. Default `0.1 r`.
+    /// gap 0. Default `0.1 r`. The barrier's tolerance with [`ContactLaw::Barrier`].
     pub onset: Real,
+    /// How contacts resist and whether the stiffness adapts. Default
+    /// [`ContactLaw::Penalty`].
+    pub law: ContactLaw,
     /// Contact segments closer than this along the rod never touch (≥ 0). Default `π r`.
     pub exclusion: Real,
     /// Length of the contact segments of the broad phase (> 0), in rest arclength.
@@ -104,6 +118,7 @@ impl ContactParams {
             radius,
             stiffness,
             onset: 0.1 * radius,
+            law: ContactLaw::Penalty,
             exclusion: std::f64::consts::PI * radius,
             segment: 2.1 * radius,
             spacing: 0.2 * radius,
@@ -111,6 +126,28 @@ impl ContactParams {
             friction: 0.0,
             slip_speed: 1e-3,
         })
+    }
+
+    /// The barrier ([`ContactLaw::Barrier`]) of stiffness `kappa` (N/m, the force scale
+    /// `kappa · tolerance · 1.19` at half the tolerance) acting within the gap
+    /// `tolerance` (m), for radius `r`; otherwise as [`ContactParams::new`].
+    pub fn barrier(radius: Real, tolerance: Real, kappa: Real) -> Result<Self, CoreError> {
+        positive("tolerance", tolerance)?;
+        let mut params = Self::new(radius, kappa)?;
+        params.onset = tolerance;
+        params.law = ContactLaw::Barrier;
+        Ok(params)
+    }
+
+    /// The penalty of least stiffness `k` raised to keep the deepest contact within half
+    /// the gap `tolerance` (m) ([`ContactLaw::AdaptivePenalty`]), its onset at the
+    /// tolerance; otherwise as [`ContactParams::new`].
+    pub fn adaptive(radius: Real, stiffness: Real, tolerance: Real) -> Result<Self, CoreError> {
+        positive("tolerance", tolerance)?;
+        let mut params = Self::new(radius, stiffness)?;
+        params.onset = tolerance;
+        params.law = ContactLaw::AdaptivePenalty { tolerance };
+        Ok(params)
     }
 
     /// Adds the floor `y = height` (normal `+y`).
@@ -131,6 +168,9 @@ impl ContactParams {
         positive("radius", self.radius)?;
         positive("stiffness", self.stiffness)?;
         positive("onset", self.onset)?;
+        if let ContactLaw::AdaptivePenalty { tolerance } = self.law {
+            positive("tolerance", tolerance)?;
+        }
         non_negative("exclusion", self.exclusion)?;
         positive("segment", self.segment)?;
         positive("spacing", self.spacing)?;
@@ -170,6 +210,10 @@ pub struct Contact {
     motion: obstacle::Motion,
     /// Radii per segment of a joined rod (see [`Contact::with_segment_radii`]).
     radii: SegmentRadii,
+    /// The state of the last stiffness update ([`stiffness`]): the smallest gap
+    /// measured and a fingerprint of the positions, so a retried step does not update
+    /// again.
+    adapted_at: Option<[Real; 2]>,
 }
 
 /// The radius of each segment of a joined rod: `starts[k]` is where segment `k` starts
@@ -184,47 +228,13 @@ impl Clone for Contact {
     fn clone(&self) -> Self {
         Self {
             radii: self.radii.clone(),
+            adapted_at: self.adapted_at,
             params: self.params,
             penalty: self.penalty,
             obstacles: self.obstacles.clone(),
             motion: self.motion.clone(),
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
-        }
-    }
-}
-
-/// What the detection found at the rod's current positions.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactSummary {
-    /// Contacts: pairs of contact segments closer than the reach `2r + δ`.
-    pub pairs: usize,
-    /// Candidate segment pairs of the broad phase.
-    pub candidates: usize,
-    /// Smallest centre-line distance among the contacts, m (`None` without contacts).
-    pub min_distance: Option<Real>,
-    /// The smallest clearance ratio (`None` without contacts): centre-line distance
-    /// over the diameter `2r` between strands, over the radius `r` from the floor or an
-    /// obstacle;
-    /// below 1 the rod overlaps.
-    pub min_clearance_ratio: Option<Real>,
-    /// Points of the rod within the penalty's reach of the floor or an obstacle.
-    pub obstacle_contacts: usize,
-}
-
-impl ContactSummary {
-    /// The summary of two sets of contacts together.
-    pub fn merged(&self, other: &ContactSummary) -> ContactSummary {
-        let min = |a: Option<Real>, b: Option<Real>| match (a, b) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
-        ContactSummary {
-            pairs: self.pairs + other.pairs,
-            candidates: self.candidates + other.candidates,
-            min_distance: min(self.min_distance, other.min_distance),
-            min_clearance_ratio: min(self.min_clearance_ratio, other.min_clearance_ratio),
-            obstacle_contacts: self.obstacle_contacts + other.obstacle_contacts,
         }
     }
 }
@@ -238,7 +248,9 @@ impl Contact {
             penalty: Penalty {
                 k: params.stiffness,
                 delta: params.onset,
+                barrier: params.law == ContactLaw::Barrier,
             },
+            adapted_at: None,
             detector: Mutex::new(Detector::default()),
             friction: Mutex::new(Friction::default()),
             obstacles: Vec::new(),
@@ -348,32 +360,6 @@ impl Contact {
         Ok(())
     }
 
-    /// Counts and closest distance of the contacts at the rod's positions.
-    pub fn summary(&self, rod: &Rod) -> Result<ContactSummary, CoreError> {
-        let mut d = self.detected(rod)?;
-        d.closest(rod, self.reach())?;
-        let min_distance = d.closest.iter().map(|c| c.distance).reduce(Real::min);
-        let (pairs, candidates) = (d.closest.len(), d.candidate_count());
-        let strands = d
-            .closest
-            .iter()
-            .map(|c| c.distance / (self.radius_at(c.s) + self.radius_at(c.t)))
-            .reduce(Real::min);
-        drop(d);
-        let (obstacle_contacts, obstacles) = self.obstacle_summary(rod)?;
-        let min_clearance_ratio = match (strands, obstacles) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
-        Ok(ContactSummary {
-            pairs,
-            candidates,
-            min_distance,
-            min_clearance_ratio,
-            obstacle_contacts,
-        })
-    }
-
     /// Whether no two material samples are closer than `r` (half the diameter): the
     /// states Newton's line search may move to (`System::admissible`). With a Newton
     /// step limit below `r/2`, strands cannot pass through each other between iterates,
@@ -425,157 +411,5 @@ impl Contact {
     pub fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
         self.for_each_contact(rod, |c| out.extend([c.s, c.t]))?;
         self.obstacle_interaction_points(rod, out)
-    }
-}
-
-impl Energy for Contact {
-    fn name(&self) -> &str {
-        "contact"
-    }
-
-    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
-        Contact::begin_step(self, rod, dt)
-    }
-
-    fn drive(&mut self, t: Real) {
-        self.move_obstacles(t);
-    }
-
-    fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {
-        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
-        detector.forget_topology();
-    }
-
-    fn save_state(&self, out: &mut SavedState) {
-        let detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
-        detector.save_state(out);
-    }
-
-    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
-        detector.load_state(rod, input)
-    }
-
-    fn time_dependent(&self) -> bool {
-        self.motion.paths.iter().any(Option::is_some)
-    }
-
-    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
-        Contact::interaction_points(self, rod, out)
-    }
-
-    fn admissible(&self, rod: &Rod) -> bool {
-        Contact::admissible(self, rod)
-    }
-
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        Ok(EnergySummary {
-            contact: Some(Contact::summary(self, rod)?),
-            ..EnergySummary::default()
-        })
-    }
-
-    fn add_obstacle_forces(
-        &self,
-        rod: &Rod,
-        out: &mut Vec<Vector3<Real>>,
-    ) -> Result<(), CoreError> {
-        out.extend(self.obstacle_forces(rod)?);
-        Ok(())
-    }
-
-    /// The same contact without friction (its frozen data belong to the coarse rod's
-    /// step), for estimators evaluating the energies on a finer copy.
-    fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
-        let mut params = self.params;
-        params.friction = 0.0;
-        let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
-        copy.ok().map(|c| Box::new(c) as Box<dyn Energy>)
-    }
-
-    fn energy(&self, rod: &Rod) -> Real {
-        let Ok(d) = self.detected(rod) else {
-            return Real::NAN;
-        };
-        let e: Real = d
-            .pairs
-            .iter()
-            .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(&d, c)))
-            .sum();
-        drop(d);
-        let surfaces = self.surface_energy(rod).unwrap_or(Real::NAN);
-        e + surfaces + self.friction_state().energy(rod, self.params.friction)
-    }
-
-    fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        let Ok(mut d) = self.detected(rod) else {
-            gradient
-                .iter_mut()
-                .for_each(|g| *g = Vector3::repeat(Real::NAN));
-            return;
-        };
-        // Each pair's force acts on its two samples (see `sample_sums`).
-        let mut sums = std::mem::take(&mut d.sums);
-        sums.clear(d.samples.s.len());
-        for c in &d.pairs {
-            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
-            sums.add_force(c.a, &force);
-            sums.add_force(c.b, &-force);
-        }
-        sums.spread_forces(&d.samples, gradient);
-        d.sums = sums;
-        drop(d);
-        if self.add_surface_gradient(rod, gradient).is_err() {
-            gradient
-                .iter_mut()
-                .for_each(|g| *g = Vector3::repeat(Real::NAN));
-            return;
-        }
-        let mu = self.params.friction;
-        self.friction_state().add_gradient(rod, mu, gradient);
-    }
-
-    fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
-        let Ok(mut d) = self.detected(rod) else {
-            hessian.scale(Real::NAN);
-            return;
-        };
-        let mut local = std::mem::take(&mut d.group_hessian);
-        let mut sums = std::mem::take(&mut d.sums);
-        sums.clear(d.samples.s.len());
-        let samples = &d.samples;
-        let first = |k: u32| samples.first[k as usize] as usize;
-        for &(start, end) in &d.groups {
-            let pairs = &d.pairs[start..end];
-            let order = samples.order;
-            // Each strand's samples touch a run of consecutive control points.
-            let run = |side: fn(&SamplePair) -> u32| {
-                let firsts = pairs
-                    .iter()
-                    .map(|c| samples.first[side(c) as usize] as usize);
-                let (lo, hi) = firsts.fold((usize::MAX, 0), |(lo, hi), f| (lo.min(f), hi.max(f)));
-                lo..hi + order
-            };
-            local.start(run(|c| c.a), run(|c| c.b));
-            for c in pairs {
-                let m = self.pair_hessian(&d, c, kind);
-                sums.add_block(c.a, &m);
-                sums.add_block(c.b, &m);
-                let a = (c.a, first(c.a), samples.row(c.a as usize));
-                local.add_cross(a, (first(c.b), samples.row(c.b as usize)), &m);
-            }
-            local.finish(hessian);
-        }
-        sums.spread_blocks(samples, hessian);
-        local.flush(hessian);
-        d.group_hessian = local;
-        d.sums = sums;
-        drop(d);
-        if self.add_surface_hessian(rod, hessian).is_err() {
-            hessian.scale(Real::NAN);
-            return;
-        }
-        let mu = self.params.friction;
-        self.friction_state().add_hessian(rod, mu, hessian);
     }
 }

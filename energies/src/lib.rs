@@ -49,7 +49,7 @@ pub mod twisting;
 
 pub use bending::{Bending, BendingTerm, STRETCH_FLOOR};
 pub use clamp::Clamp;
-pub use contact::{Contact, ContactParams, ContactSummary, Obstacle};
+pub use contact::{Contact, ContactLaw, ContactParams, ContactSummary, Obstacle};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary};
 pub use gravity::Gravity;
 pub use lanes::LaneTerm;

@@ -50,6 +50,16 @@ pub struct ContactStats {
     pub max_pairs: usize,
     /// Most material samples touching an obstacle at once (0 without obstacles).
     pub max_obstacle_contacts: usize,
+    /// The contact stiffness at the end, N/m: the penalty's `k` or the barrier's `κ`,
+    /// as the updates left it (`splinerod_energies::contact::stiffness`).
+    pub stiffness_used: Option<Real>,
+    /// The gap tolerance, m (`null` for a fixed penalty: `stiffness` without
+    /// `tolerance`).
+    pub tolerance: Option<Real>,
+    /// The smallest gap at the end over the contact's sample pairs and surface points,
+    /// m (negative: overlap; `null` if nothing is within reach): at rest, how far from
+    /// touching the contacts sit.
+    pub end_gap: Option<Real>,
 }
 
 impl ContactStats {
@@ -57,6 +67,9 @@ impl ContactStats {
     pub(crate) fn add(&mut self, summary: &ContactSummary) {
         self.max_pairs = self.max_pairs.max(summary.pairs);
         self.max_obstacle_contacts = self.max_obstacle_contacts.max(summary.obstacle_contacts);
+        self.stiffness_used = Some(summary.stiffness);
+        self.tolerance = summary.tolerance;
+        self.end_gap = summary.min_gap;
         if let Some(ratio) = summary.min_clearance_ratio {
             self.min_clearance_ratio =
                 Some(self.min_clearance_ratio.map_or(ratio, |r| r.min(ratio)));

@@ -131,6 +131,12 @@ impl RunResult {
             let n = c.max_obstacle_contacts;
             parts.push(format!("at most {n} points against {what}"));
         }
+        if let Some(k) = c.stiffness_used {
+            parts.push(format!("stiffness {k:.3e} N/m"));
+        }
+        if let (Some(g), Some(t)) = (c.end_gap, c.tolerance) {
+            parts.push(format!("end gap {g:.3e} m (tolerance {t:.3e} m)"));
+        }
         match parts.is_empty() {
             true => String::new(),
             false => format!("contact: {}\n", parts.join(", ")),

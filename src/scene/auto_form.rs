@@ -74,10 +74,7 @@ impl Scene {
     /// (default a tenth of the thinnest radius) and a tolerance-driven adapter's
     /// tolerance, the larger; 0 without either.
     fn model_error(&self) -> Real {
-        let contact = match (&self.contact, self.contact_radius()) {
-            (Some(c), Some(r)) => c.onset.unwrap_or(0.1 * r),
-            _ => 0.0,
-        };
+        let contact = self.contact_layer().unwrap_or(0.0);
         let adaptive = match &self.adaptivity {
             Some(a) => a.aimed_error(self.rod.rest_length),
             None => 0.0,
@@ -87,7 +84,7 @@ impl Scene {
 
     /// The largest tensile and compressive Green–Lagrange strain of the start
     /// ([`AutoInputs::start_strains`]; zero for an initial curve taken as the rest shape).
-    fn start_strain(&self, rod: &Rod) -> (Real, Real) {
+    pub(crate) fn start_strain(&self, rod: &Rod) -> (Real, Real) {
         match self.rod.rest_shape {
             RestShape::Initial => (0.0, 0.0),
             _ => AutoInputs::start_strains(rod),
@@ -96,6 +93,11 @@ impl Scene {
 
     /// The loads' strain scale: weight, loads and grabs over `EA` (module docs).
     fn load_strain(&self, rod: &Rod) -> Result<Real, Error> {
+        Ok(self.load_tension(rod)? / self.rod.stretch_stiffness)
+    }
+
+    /// The loads' tension scale, N: weight, loads and grabs (module docs).
+    pub(crate) fn load_tension(&self, rod: &Rod) -> Result<Real, Error> {
         let r = &self.rod;
         let weight = r.linear_density * Vector3::from(self.world.gravity).norm() * r.rest_length;
         let loads: Real = self
@@ -115,11 +117,11 @@ impl Scene {
             let from = rod.point(g.at * r.rest_length)?;
             grabs += g.stiffness * (Vector3::from(g.to) - from).norm();
         }
-        Ok((weight + loads + grabs) / r.stretch_stiffness)
+        Ok(weight + loads + grabs)
     }
 
     /// The largest stretch consecutive fixed pins impose (module docs), ≥ 0.
-    fn pin_strain(&self, rod: &Rod) -> Result<Real, Error> {
+    pub(crate) fn pin_strain(&self, rod: &Rod) -> Result<Real, Error> {
         let l = self.rod.rest_length;
         let mut pins = Vec::new();
         for spec in self.pins.iter().filter(|p| p.slides_along.is_none()) {

@@ -137,7 +137,7 @@ impl Scene {
         if !self.rods.is_empty() {
             return self.build_world();
         }
-        let rod = self.build_rod()?;
+        let rod = self.resolve_coarse_start(self.build_rod()?)?;
         let l = rod.material().rest_length;
         let ea = self.rod.stretch_stiffness;
         let mut stretching = match self.rod.rest_shape {

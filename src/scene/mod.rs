@@ -10,6 +10,7 @@ pub(crate) mod adapt;
 mod auto_form;
 mod build;
 pub(crate) mod closed;
+mod coarse_start;
 pub(crate) mod contact;
 pub(crate) mod ensemble;
 mod found;

@@ -211,6 +211,7 @@ impl Contact {
                         row: samples.row(k),
                         obstacle: Some(i),
                         radius: r,
+                        s: samples.s[k],
                     });
                 }
             }

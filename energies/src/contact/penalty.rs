@@ -10,19 +10,28 @@
 //! non-increasing, which keeps Newton's method well behaved as contacts appear and vanish.
 //! A contact pushing with force `F` settles at the gap \\(\delta - \sqrt{2\delta F/k}\\)
 //! while \\(F < k\delta/2\\), i.e. before the surfaces touch.
+//!
+//! With `barrier` set, [`Penalty`] is instead the barrier of the `barrier` module, of
+//! stiffness `k` and tolerance `delta` (the gap where it starts).
 
+use super::barrier::barrier;
 use splinerod_core::Real;
 
-/// The penalty of stiffness `k` (N/m) and onset thickness `delta` (m).
+/// The penalty of stiffness `k` (N/m) and onset thickness `delta` (m), or with
+/// `barrier` the barrier of stiffness `k` and tolerance `delta`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Penalty {
     pub k: Real,
     pub delta: Real,
+    pub barrier: bool,
 }
 
 impl Penalty {
     /// \\(\phi(g)\\), J.
     pub fn value(&self, g: Real) -> Real {
+        if self.barrier {
+            return barrier(self.k, self.delta, g)[0];
+        }
         let (k, d) = (self.k, self.delta);
         if g >= d {
             0.0
@@ -35,6 +44,9 @@ impl Penalty {
 
     /// \\(\phi'(g)\\), N (non-positive: the force pushes the gap open).
     pub fn slope(&self, g: Real) -> Real {
+        if self.barrier {
+            return barrier(self.k, self.delta, g)[1];
+        }
         let (k, d) = (self.k, self.delta);
         if g >= d {
             0.0
@@ -47,6 +59,9 @@ impl Penalty {
 
     /// \\(\phi''(g)\\), N/m (non-negative).
     pub fn curvature(&self, g: Real) -> Real {
+        if self.barrier {
+            return barrier(self.k, self.delta, g)[2];
+        }
         let (k, d) = (self.k, self.delta);
         if g >= d {
             0.0
@@ -67,6 +82,7 @@ mod tests {
         let p = Penalty {
             k: 1e4,
             delta: 2e-4,
+            barrier: false,
         };
         let h = 1e-9;
         for g in [-1e-3, -1e-4, -1e-12, 0.0, 1e-12, 5e-5, 1.9e-4, 2e-4, 3e-4] {

@@ -32,6 +32,8 @@ pub(crate) struct PenaltyPoint<'a> {
     pub obstacle: Option<usize>,
     /// The rod's radius there, m.
     pub radius: Real,
+    /// Its material coordinate, m.
+    pub s: Real,
 }
 
 impl Contact {
@@ -57,6 +59,7 @@ impl Contact {
                     row: q.value,
                     obstacle: None,
                     radius: r,
+                    s: q.s,
                 });
             }
         }

@@ -1,0 +1,195 @@
+//! [`Contact`] as an [`Energy`]: the energy, gradient and Hessian summed over sample
+//! pairs and surface points, the step's lifecycle (stiffness update, then friction's
+//! frozen forces), checkpoints and the finer copy for error estimates.
+
+use super::{Contact, ContactLaw, SamplePair};
+use crate::{Energy, EnergySummary};
+use nalgebra::Vector3;
+use splinerod_core::rod::positive;
+use splinerod_core::{
+    BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod, SavedState, StateReader,
+};
+
+impl Energy for Contact {
+    fn name(&self) -> &str {
+        "contact"
+    }
+
+    /// Updates an adapting stiffness ([`Contact::adapt_stiffness`]), then freezes
+    /// friction.
+    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
+        positive("dt", dt)?;
+        self.adapt_stiffness(rod)?;
+        Contact::begin_step(self, rod, dt)
+    }
+
+    /// In a static solve (`stiffen`), raises an adapting stiffness where the tolerance
+    /// is not met (see [`stiffness`]); between time steps nothing (their updates come
+    /// at [`Energy::begin_step`]).
+    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
+        if stiffen {
+            self.stiffen_for_statics(rod)
+        } else {
+            0.0
+        }
+    }
+
+    fn drive(&mut self, t: Real) {
+        self.move_obstacles(t);
+    }
+
+    fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.forget_topology();
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        let detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
+        detector.save_state(out);
+        if self.params.law != ContactLaw::Penalty {
+            out.real(self.penalty.k);
+            out.reals(&self.adapted_at.unwrap_or([Real::NAN; 2]));
+        }
+    }
+
+    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.load_state(rod, input)?;
+        if self.params.law != ContactLaw::Penalty {
+            self.set_stiffness(input.real()?)?;
+            let mut at = Vec::new();
+            input.reals_into(&mut at)?;
+            self.adapted_at = match at[..] {
+                [g, f] if !f.is_nan() => Some([g, f]),
+                [_, _] => None,
+                _ => return Err(CoreError::StateMismatch("a contact stiffness state")),
+            };
+        }
+        Ok(())
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.motion.paths.iter().any(Option::is_some)
+    }
+
+    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
+        Contact::interaction_points(self, rod, out)
+    }
+
+    fn admissible(&self, rod: &Rod) -> bool {
+        Contact::admissible(self, rod)
+    }
+
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            contact: Some(Contact::summary(self, rod)?),
+            ..EnergySummary::default()
+        })
+    }
+
+    fn add_obstacle_forces(
+        &self,
+        rod: &Rod,
+        out: &mut Vec<Vector3<Real>>,
+    ) -> Result<(), CoreError> {
+        out.extend(self.obstacle_forces(rod)?);
+        Ok(())
+    }
+
+    /// The same contact at its stiffness now, without friction (its frozen data belong
+    /// to the coarse rod's step), for estimators evaluating the energies on a finer copy.
+    fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
+        let mut params = self.params;
+        params.friction = 0.0;
+        let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
+        let mut copy = copy.ok()?;
+        copy.penalty = self.penalty;
+        Some(Box::new(copy) as Box<dyn Energy>)
+    }
+
+    fn energy(&self, rod: &Rod) -> Real {
+        let Ok(d) = self.detected(rod) else {
+            return Real::NAN;
+        };
+        let e: Real = d
+            .pairs
+            .iter()
+            .map(|c| self.pair_weight(&d, c) * self.penalty.value(self.gap(&d, c)))
+            .sum();
+        drop(d);
+        let surfaces = self.surface_energy(rod).unwrap_or(Real::NAN);
+        e + surfaces + self.friction_state().energy(rod, self.params.friction)
+    }
+
+    fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        let Ok(mut d) = self.detected(rod) else {
+            gradient
+                .iter_mut()
+                .for_each(|g| *g = Vector3::repeat(Real::NAN));
+            return;
+        };
+        // Each pair's force acts on its two samples (see `sample_sums`).
+        let mut sums = std::mem::take(&mut d.sums);
+        sums.clear(d.samples.s.len());
+        for c in &d.pairs {
+            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
+            sums.add_force(c.a, &force);
+            sums.add_force(c.b, &-force);
+        }
+        sums.spread_forces(&d.samples, gradient);
+        d.sums = sums;
+        drop(d);
+        if self.add_surface_gradient(rod, gradient).is_err() {
+            gradient
+                .iter_mut()
+                .for_each(|g| *g = Vector3::repeat(Real::NAN));
+            return;
+        }
+        let mu = self.params.friction;
+        self.friction_state().add_gradient(rod, mu, gradient);
+    }
+
+    fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
+        let Ok(mut d) = self.detected(rod) else {
+            hessian.scale(Real::NAN);
+            return;
+        };
+        let mut local = std::mem::take(&mut d.group_hessian);
+        let mut sums = std::mem::take(&mut d.sums);
+        sums.clear(d.samples.s.len());
+        let samples = &d.samples;
+        let first = |k: u32| samples.first[k as usize] as usize;
+        for &(start, end) in &d.groups {
+            let pairs = &d.pairs[start..end];
+            let order = samples.order;
+            // Each strand's samples touch a run of consecutive control points.
+            let run = |side: fn(&SamplePair) -> u32| {
+                let firsts = pairs
+                    .iter()
+                    .map(|c| samples.first[side(c) as usize] as usize);
+                let (lo, hi) = firsts.fold((usize::MAX, 0), |(lo, hi), f| (lo.min(f), hi.max(f)));
+                lo..hi + order
+            };
+            local.start(run(|c| c.a), run(|c| c.b));
+            for c in pairs {
+                let m = self.pair_hessian(&d, c, kind);
+                sums.add_block(c.a, &m);
+                sums.add_block(c.b, &m);
+                let a = (c.a, first(c.a), samples.row(c.a as usize));
+                local.add_cross(a, (first(c.b), samples.row(c.b as usize)), &m);
+            }
+            local.finish(hessian);
+        }
+        sums.spread_blocks(samples, hessian);
+        local.flush(hessian);
+        d.group_hessian = local;
+        d.sums = sums;
+        drop(d);
+        if self.add_surface_hessian(rod, hessian).is_err() {
+            hessian.scale(Real::NAN);
+            return;
+        }
+        let mu = self.params.friction;
+        self.friction_state().add_hessian(rod, mu, hessian);
+    }
+}
