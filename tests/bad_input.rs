@@ -2,7 +2,7 @@
 //! panic: through the library (`Scene::from_toml`, `Scene::build_system`, `run`) and
 //! through the `splinerod` command line (exit code 2, one `error:` line on stderr).
 
-mod common;
+use crate::common;
 
 use common::*;
 use splinerod::Scene;

@@ -3,7 +3,7 @@
 //! never a panic; through the library (`Scene::from_toml`, `Scene::build_system`) and
 //! through the `splinerod` command line (exit code 2).
 
-mod common;
+use crate::common;
 
 use common::*;
 use splinerod::knot::OverhandSpec;

@@ -9,7 +9,7 @@
 //!   vs \\(\pi^2 EI/L^2\\).
 //!
 //! Stretching is present with a large `EA` (the rod is then nearly inextensible, as beam
-//! theory assumes); the figures are printed (`cargo test --release --test bending -- --nocapture`).
+//! theory assumes); the figures are printed (`cargo test --release --test integration bending:: -- --nocapture`).
 
 use splinerod::core::BlockBanded;
 use splinerod::energies::{Bending, Clamp};

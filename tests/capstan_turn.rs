@@ -4,7 +4,7 @@
 //! At 8 control points (a user's coarse fit of the wrap, overlapping the capsule only
 //! because it is coarse) the start is refined and pushed out, not refused (#46), and
 //! the rope holds below e^{2πμ} and slides above it.
-//! Figures: `cargo test --release --test capstan_turn -- --nocapture`.
+//! Figures: `cargo test --release --test integration capstan_turn:: -- --nocapture`.
 
 use nalgebra::{DMatrix, Vector3};
 use splinerod::core::basis::greville;

@@ -1,7 +1,7 @@
 //! Closed rods in scenes (#20): `[rod.ring]` and `closed = true`, with contact, pins,
 //! cuts and adaptivity; bad input named.
 
-mod common;
+use crate::common;
 
 use common::*;
 use splinerod::prelude::*;

@@ -3,7 +3,7 @@
 //! within the gap tolerance (default and given, several radii, densities and
 //! stiffnesses), and every bundled contact scene with its `stiffness` removed keeps its
 //! clearance (≥ 0.95 of the contact distance) and ends with no contact deeper than the
-//! tolerance. Figures: `cargo test --release --test contact_tolerance -- --nocapture`.
+//! tolerance. Figures: `cargo test --release --test integration contact_tolerance:: -- --nocapture`.
 
 use nalgebra::Vector3;
 use splinerod::{Real, Scene, Simulation};

@@ -2,7 +2,7 @@
 //! a static solve uses the path's end, the midpoint rule's energy guard counts the
 //! pins' work, and bad paths are refused naming the field.
 
-mod common;
+use crate::common;
 
 use common::{assert_field, rejected, sample_gap};
 use nalgebra::Vector3;

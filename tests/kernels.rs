@@ -5,7 +5,7 @@
 //! the value. Every subprocess gets the variable explicitly, so these tests mean the
 //! same in CI's portable pass.
 
-mod common;
+use crate::common;
 
 use common::cli::{fresh_dir, scene_variant};
 use serde_json::Value;

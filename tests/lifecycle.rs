@@ -1,7 +1,7 @@
 //! One path for knot changes, energies' lifecycle hooks, static solves through the
 //! same stages as time steps.
 
-mod common;
+use crate::common;
 
 use common::sample_gap;
 use nalgebra::Vector3;

@@ -2,7 +2,7 @@
 //! are refused naming the field, and the capstan law: a rope over a capsule, loaded at
 //! both ends, slips when the load ratio passes e^{μθ} (θ = π here).
 
-mod common;
+use crate::common;
 
 use common::{assert_field, rejected};
 use nalgebra::Vector3;

@@ -4,7 +4,7 @@
 //! limits are refused naming the fields, unless `--allow-large` (and then still when the
 //! memory could not exist).
 
-mod common;
+use crate::common;
 
 use common::cli::{fresh_dir as dir, refused, scene_variant, splinerod};
 use serde_json::Value;

@@ -1,7 +1,7 @@
 //! Moving obstacles: a rope lying across a conveyor (a plane sliding along itself at
 //! 0.1 m/s) is carried along by friction at the belt's speed, and stays put without
 //! friction; a sphere driven into a hanging rope pushes it aside without passing through.
-//! Figures: `cargo test --release --test moving_obstacles -- --nocapture`.
+//! Figures: `cargo test --release --test integration moving_obstacles:: -- --nocapture`.
 
 use splinerod::{run, Scene};
 

@@ -2,7 +2,7 @@
 //! friction above the capstan threshold (pressing on it with its weight) and slides off
 //! below it, without entering the obstacle; bad `[[obstacles]]` entries are refused naming the field.
 
-mod common;
+use crate::common;
 
 use common::{assert_field, rejected};
 use splinerod::{run, RunResult, Scene};

@@ -199,7 +199,7 @@ fn summary_counts_the_points_on_the_floor() {
     assert!(contact.max_obstacle_contacts > 0, "{contact:?}");
     let summary = result.summary();
     let expected = format!(
-        "at most {} points against the floor\n",
+        "at most {} points against the floor,",
         contact.max_obstacle_contacts
     );
     assert!(summary.contains(&expected), "{summary}");

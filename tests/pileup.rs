@@ -1,7 +1,7 @@
 //! A rope lowered onto the floor faster than it can lie down piles up without passing
 //! through itself (`scenes/rope_pileup.toml`): clearance ≥ 0.95 of the diameter
 //! throughout, the rope ends on the floor in a compact pile with strands lying on
-//! strands. Figures: `cargo test --release --test pileup -- --nocapture`.
+//! strands. Figures: `cargo test --release --test integration pileup:: -- --nocapture`.
 
 use splinerod::{run, Scene};
 

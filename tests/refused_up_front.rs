@@ -2,7 +2,7 @@
 //! before the first step, naming the field (issue #45's "silent wrong answers" and
 //! "failures mid-run"); and what used to fail mid-run now runs.
 
-mod common;
+use crate::common;
 
 use common::*;
 use splinerod::Scene;

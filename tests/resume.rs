@@ -6,7 +6,7 @@
 //! it) and a static solve, also when stopped on the step of a cut or of a knot change.
 //! Foreign and damaged checkpoints are refused with one line.
 
-mod common;
+use crate::common;
 
 use common::cli::{fresh_dir as dir, ok, refused, scene_variant as variant};
 use serde_json::Value;

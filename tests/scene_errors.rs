@@ -4,7 +4,7 @@
 //! is called a table; a close name is suggested; every missing required field is named
 //! at once; command-line options that do not go together say why in a sentence.
 
-mod common;
+use crate::common;
 
 use common::cli::{fresh_dir, ok, refused};
 use common::*;

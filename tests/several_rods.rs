@@ -2,7 +2,7 @@
 //! would alone; two ropes crossing rest on each other with the forces statics demands;
 //! bad tables are named.
 
-mod common;
+use crate::common;
 
 use common::*;
 use nalgebra::Vector3;

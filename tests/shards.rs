@@ -4,7 +4,7 @@
 //! and groups of the batched step cut short included); bad shards and merges exit 2
 //! naming the problem, and more shards than members are refused for every `K`.
 
-mod common;
+use crate::common;
 
 use common::cli::{ok, splinerod};
 use serde_json::Value;

@@ -3,8 +3,8 @@
 //! removed, contact pairs and clearance, pieces, control points — checked in as JSON
 //! under `tests/snapshots/`, so a behaviour change shows up in review without timing
 //! noise. After an intended change, regenerate them with
-//! `SPLINEROD_UPDATE_SNAPSHOTS=1 cargo test --release --test snapshots` and commit the
-//! diff. Every run is also checked for hinges (`RunResult::hinge_steps`, #46): no
+//! `SPLINEROD_UPDATE_SNAPSHOTS=1 cargo test --release --test integration snapshots::` and commit the
+//! diff. Every run is also checked for finite positions and energies and for hinges (`RunResult::hinge_steps`, #46): no
 //! bundled scene may leave a corner on a rod with bending or twist, at any step.
 //!
 //! Counts and real numbers must agree within 2 % (counts below 50 exactly): round-off
@@ -128,6 +128,15 @@ fn every_bundled_scene_matches_its_snapshot() {
     for path in &paths {
         let scene = Scene::load(path).expect("bundled scene loads");
         let result = run(&scene).expect("bundled scene runs");
+        let positions = result.samples.positions.iter().flatten();
+        if !(positions.into_iter().all(|x| x.is_finite())
+            && result.energy.values().all(|e| e.is_finite()))
+        {
+            problems.push(format!(
+                "{}: a position or energy is not finite",
+                path.display()
+            ));
+        }
         // #46: no bundled scene ever holds a hinge (a corner on a rod with bending).
         if result.hinge_steps > 0 {
             problems.push(format!(

@@ -7,7 +7,7 @@
 //!   root of that 4×4 determinant (computed below); the measured one is where the
 //!   lowest ω² of the modal analysis of the twisted straight state crosses zero.
 //!
-//! Figures: `cargo test --release --test twist -- --nocapture`.
+//! Figures: `cargo test --release --test integration twist:: -- --nocapture`.
 
 use splinerod::energies::{Bending, Clamp, Frame, Stretching, Twisting};
 use splinerod::integrators::modal;

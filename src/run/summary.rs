@@ -113,8 +113,9 @@ impl RunResult {
         )
     }
 
-    /// What touched: pairs of strands, and points against the floor or obstacles; empty
-    /// when nothing came within the penalty's reach.
+    /// What touched: pairs of strands, and points against the floor or obstacles, then
+    /// the stiffness used and the smallest gap at the end against the tolerance; empty
+    /// when nothing came within the contact's reach.
     fn contact_line(&self, c: &ContactStats) -> String {
         let mut parts = Vec::new();
         if let Some(r) = c.min_clearance_ratio {
@@ -130,6 +131,9 @@ impl RunResult {
             };
             let n = c.max_obstacle_contacts;
             parts.push(format!("at most {n} points against {what}"));
+        }
+        if parts.is_empty() {
+            return String::new();
         }
         if let Some(k) = c.stiffness_used {
             parts.push(format!("stiffness {k:.3e} N/m"));

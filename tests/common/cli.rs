@@ -34,9 +34,12 @@ pub fn refused(args: &[&str]) -> String {
     line
 }
 
-/// A fresh, empty temporary directory for `test`.
+/// A fresh, empty temporary directory for `test` (unique in the process: the
+/// integration tests share one).
 pub fn fresh_dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("splinerod-{}-{test}", std::process::id()));
+    static MADE: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let d = std::env::temp_dir().join(format!("splinerod-{}-{n}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("temp dir");
     d
