@@ -24,3 +24,8 @@ def cli():
     )
     target = pathlib.Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
     return target / "release" / "splinerod"
+
+
+def pytest_configure(config):
+    """The `slow` mark: tests CI leaves out (`-m "not slow"`), run by a plain `pytest`."""
+    config.addinivalue_line("markers", "slow: a slow case; CI runs the others")
