@@ -29,7 +29,7 @@ pub(crate) mod solver;
 pub(crate) use crate::error::{finite_vec, fraction, non_negative, positive};
 pub use crate::scene::adapt::{AdaptivitySpec, CutSpec, GrabSpec};
 pub use crate::scene::closed::RingSpec;
-pub use crate::scene::contact::ContactSpec;
+pub use crate::scene::contact::{ContactSpec, DEFAULT_TOLERANCE_RADII};
 pub use crate::scene::ensemble::EnsembleSpec;
 pub use crate::scene::limits::{Limits, Resources};
 pub(crate) use crate::scene::load::parse_error;

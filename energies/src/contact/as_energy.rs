@@ -24,7 +24,7 @@ impl Energy for Contact {
     }
 
     /// In a static solve (`stiffen`), raises an adapting stiffness where the tolerance
-    /// is not met (see [`stiffness`]); between time steps nothing (their updates come
+    /// is not met (see [`crate::contact::stiffness`]); between time steps nothing (their updates come
     /// at [`Energy::begin_step`]).
     fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
         if stiffen {
