@@ -31,6 +31,8 @@ pub mod batched;
 mod bdf2;
 mod block_pattern;
 pub mod block_sparse;
+#[cfg(test)]
+mod cholesky_variants;
 pub mod conformance;
 pub mod convergence;
 mod error;
