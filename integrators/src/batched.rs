@@ -335,91 +335,60 @@ fn factor_lanes<const FUSED: bool>(band: &mut LaneBand, n: usize, bw: usize) -> 
 }
 
 #[cfg(test)]
+impl BatchedBandedCholesky {
+    /// [`Self::factor_band`] and [`Self::solve_in_place`] with the plain kernels, or
+    /// with `fused` the fused ones, whatever the process's kernel set is (for the table
+    /// of every Cholesky variant, `crate::cholesky_variants`); per lane whether it was
+    /// positive definite, `None` where the processor lacks AVX2 and FMA.
+    pub(crate) fn factor_and_solve_with(
+        &mut self,
+        fused: bool,
+        a: &mut LaneBand,
+        x: &mut [Lanes],
+    ) -> Option<[bool; LANES]> {
+        std::mem::swap(&mut self.u, a);
+        (self.n, self.bw, self.factored) = (self.u.dim(), self.u.bandwidth(), true);
+        assert_eq!(x.len(), 3 * self.n);
+        if !fused {
+            let ok = factor_lanes::<false>(&mut self.u, self.n, self.bw);
+            self.substitute::<false>(x);
+            return Some(ok);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if splinerod_core::kernels::KernelSet::Avx2Fma.available() {
+            // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+            unsafe {
+                let ok = factor_lanes_wide(&mut self.u, self.n, self.bw);
+                self.solve_wide(x);
+                return Some(ok);
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
-    use crate::banded_cholesky::BandedCholesky;
+    use crate::cholesky_variants::{Fill, Shape};
     use nalgebra::Matrix3;
-    use splinerod_core::Real;
 
-    /// A block-banded SPD matrix: a band of pseudo-random blocks made diagonally
-    /// dominant, different per `seed`.
-    fn band(n: usize, bw: usize, seed: Real) -> BlockBanded {
-        let mut a = BlockBanded::zeros(n, bw);
-        for i in 0..n {
-            for j in i..(i + bw + 1).min(n) {
-                let block = Matrix3::from_fn(|r, c| {
-                    ((i * 31 + j * 17 + r * 7 + c * 3) as Real * seed).sin()
-                });
-                let block = if i == j {
-                    block + block.transpose() + Matrix3::identity() * (12.0 * bw as Real)
-                } else {
-                    block
-                };
-                a.add_block(i, j, &block);
-            }
+    /// The table's diagonally dominant `n × bw` band (lane 0's).
+    fn band(n: usize, bw: usize) -> BlockBanded {
+        Shape {
+            n,
+            bw,
+            fill: Fill::Dominant,
         }
-        a
-    }
-
-    #[test]
-    fn every_lane_solves_like_the_scalar_factorisation() {
-        let (n, bw) = (16, 5);
-        let mats: Vec<BlockBanded> = (0..LANES).map(|l| band(n, bw, 0.3 + l as Real)).collect();
-        let mut batched = BatchedBandedCholesky::default();
-        batched
-            .factor([&mats[0], &mats[1], &mats[2], &mats[3]])
-            .expect("factor");
-        let rhs = |l: usize, k: usize| ((k * 13 + l * 5) as Real * 0.7).cos();
-        let mut x: Vec<Lanes> = (0..3 * n)
-            .map(|k| std::array::from_fn(|l| rhs(l, k)))
-            .collect();
-        batched.solve_in_place(&mut x).expect("solve");
-        for (l, m) in mats.iter().enumerate() {
-            let mut solver = BandedCholesky::new();
-            solver.factor(m).expect("scalar factor");
-            let mut y: Vec<Real> = (0..3 * n).map(|k| rhs(l, k)).collect();
-            solver.solve_in_place(&mut y).expect("scalar solve");
-            let worst = y
-                .iter()
-                .zip(&x)
-                .map(|(a, b)| (a - b[l]).abs() / a.abs().max(1.0))
-                .fold(0.0, Real::max);
-            assert!(worst < 1e-13, "lane {l}: {worst:e}");
-        }
-    }
-
-    #[test]
-    fn the_plain_and_the_fused_kernels_agree_to_round_off() {
-        let (n, bw) = (12, 5);
-        let mats: Vec<BlockBanded> = (0..LANES).map(|l| band(n, bw, 0.7 + l as Real)).collect();
-        // The matrices in lane form, factorised by each kernel.
-        let mut a = LaneBand::default();
-        a.reset(n, bw);
-        for i in 0..n {
-            for (k, slot) in a.row_mut(i).iter_mut().enumerate() {
-                for (lane, m) in mats.iter().enumerate() {
-                    for (e, &v) in slot.iter_mut().zip(m.upper(i, k).as_slice()) {
-                        e[lane] = v;
-                    }
-                }
-            }
-        }
-        let (mut plain, mut fused) = (a.clone(), a.clone());
-        assert_eq!(factor_lanes::<false>(&mut plain, n, bw), [true; LANES]);
-        assert_eq!(factor_lanes::<true>(&mut fused, n, bw), [true; LANES]);
-        for (p, f) in plain.blocks().iter().zip(fused.blocks()) {
-            for (p, f) in p.iter().flatten().zip(f.iter().flatten()) {
-                assert!((p - f).abs() <= 1e-13 * (1.0 + p.abs()), "{p} against {f}");
-            }
-        }
+        .matrix(0)
     }
 
     #[test]
     fn mismatched_shapes_and_indefinite_lanes_are_errors() {
-        let (a, b) = (band(8, 3, 0.5), band(9, 3, 0.5));
+        let (a, b) = (band(8, 3), band(9, 3));
         let mut batched = BatchedBandedCholesky::default();
         assert!(batched.factor([&a, &a, &b, &a]).is_err());
-        let mut c = band(8, 3, 0.5);
+        let mut c = band(8, 3);
         c.add_block(4, 4, &(Matrix3::identity() * -1e3));
         assert!(batched.factor([&a, &a, &c, &a]).is_err());
         assert!(batched.solve_in_place(&mut [[0.0; LANES]; 5]).is_err());

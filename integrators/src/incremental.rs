@@ -302,7 +302,7 @@ impl Stepper {
             params,
             &mut self.workspace,
         )?;
-        if stats.converged || params.accept_unconverged || params.max_iterations == 1 {
+        if params.accepts(stats.converged) {
             Ok(stats)
         } else {
             Err(IntegratorError::NotConverged {

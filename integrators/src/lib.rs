@@ -31,7 +31,10 @@ pub mod batched;
 mod bdf2;
 mod block_pattern;
 pub mod block_sparse;
+#[cfg(test)]
+mod cholesky_variants;
 pub mod conformance;
+pub mod convergence;
 mod error;
 mod implicit_euler;
 mod incremental;
@@ -49,6 +52,7 @@ mod statics;
 
 pub use banded_cholesky::BandedCholesky;
 pub use bdf2::Bdf2;
+pub use convergence::{ConvergenceTracker, NewtonVerdict};
 pub use error::IntegratorError;
 pub use implicit_euler::ImplicitEuler;
 pub use linear::LinearSolverKind;

@@ -10,40 +10,22 @@
 //! [`NewtonParams::max_step`] if longer — halving it while the Armijo condition
 //! \\(\Phi(x + t\Delta x) \le \Phi(x) + 10^{-4}\, t\, r \cdot \Delta x\\) fails —
 //! except a step already converging (at most half the one before, within the round-off
-//! band below), taken whole: its merit change can be below the merit's own rounding.
+//! band), taken whole: its merit change can be below the merit's own rounding.
 //! It stops when the step moves no material point by more than
-//! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]).
-//!
-//! **Why a step test, and its round-off floor.** The unknowns are positions (or
-//! velocities times the step), so the step length is the error that matters to a user,
-//! in metres, relative to the rod: near a solution Newton's step is the distance to it
-//! (quadratic convergence makes the next one negligible). The residual, the other
-//! candidate, mixes stiff and soft directions: for EA = 1e7 N a force of 1e-7 N is a
-//! 1e-14 m axial error but a 1e-8 m transverse one. But a step cannot shrink below what
-//! round-off in the residual allows, `‖A⁻¹ η‖` for a residual noise `η`, which grows
-//! with the conditioning (the stiff-to-soft ratio: about 1e-12 m for that cable, at a
-//! 1e-12 · L tolerance). Rather than guess `η`, the solver watches for it: when two full
-//! steps in a row fail to halve while already below [`ROUND_OFF_BAND`] tolerances,
-//! quadratic convergence has stopped at the floor, and the step is compared with the
-//! widened tolerance instead. (A definite Hessian converging linearly at rate `c` would
-//! be stopped there too, with an error of at most `step / (1 − c)`.)
+//! `tolerance · rest_length` (see [`NewtonProblem::length_per_unknown`]), or by the
+//! widened tolerance once the steps stall at round-off. These per-iteration decisions
+//! (iteration limit, divergence, stall band, converging steps) are one
+//! [`ConvergenceTracker`]'s, the type each lane of the batched solver
+//! ([`crate::lane_euler`]) owns too; [`crate::convergence`] states the rules and why.
 
+use crate::convergence::ConvergenceTracker;
+pub use crate::convergence::{DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
 use crate::kkt::Constraints;
 use crate::linear::{LinearSolver, LinearSolverKind};
 use crate::remainder::{RemainderCg, MOTION_FRACTION, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
-
-/// A Newton step moving a material point by more than this many rest lengths is taken
-/// as divergence (a safety net against numerical explosion, e.g. a linearised step on a
-/// rod too stiff for its time step), not as motion.
-pub const DIVERGENCE_LENGTHS: Real = 1e3;
-
-/// Width of the round-off band, in tolerances: once two full steps in a row fail to
-/// halve while the step is below `ROUND_OFF_BAND · tolerance`, the iterates sit at the
-/// floor that round-off sets for the problem's conditioning (see the module docs).
-pub const ROUND_OFF_BAND: Real = 1e3;
 
 /// Settings of Newton's method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,6 +81,13 @@ impl NewtonParams {
             Some(limit) => crate::error::positive("max_step", limit),
             None => Ok(()),
         }
+    }
+
+    /// Whether a solve that ended `converged` (or not) stands: converged, or unconverged
+    /// with [`accept_unconverged`](Self::accept_unconverged), or a single iteration (the
+    /// linearised scheme). The scalar and the batched implicit Euler both ask this.
+    pub fn accepts(&self, converged: bool) -> bool {
+        converged || self.accept_unconverged || self.max_iterations == 1
     }
 }
 
@@ -231,20 +220,20 @@ pub fn solve(
     for (p, pin) in system.pins().iter().enumerate() {
         ws.constraints.targets[p] = problem.target(&ws.constraints.rows()[p], pin);
     }
-    let tolerance = params.tolerance * system.rod().material().rest_length;
+    let mut tracker = ConvergenceTracker::new(params, system.rod().material().rest_length);
+    let tolerance = tracker.tolerance();
     let length = problem.length_per_unknown();
     ws.floor = REMAINDER_FLOOR * tolerance / length;
     ws.motion = None;
     let mut stats = StepStats::default();
-    let mut previous = [Real::INFINITY; 2];
     // The merit at the applied iterate, once the line search has measured it.
     let mut merit = None;
     problem.apply(system.rod_mut(), x);
-    while stats.newton_iterations < params.max_iterations {
+    while tracker.next_iteration() {
         if system.interrupted() {
             return Err(IntegratorError::Interrupted);
         }
-        stats.newton_iterations += 1;
+        stats.newton_iterations = tracker.iterations();
         problem.residual_and_matrix(system, &mut ws.r, ws.solver.matrix_mut());
         let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;
         let descends = slope < 0.0;
@@ -252,36 +241,22 @@ pub fn solve(
             // The exact step climbs the merit: take the definite one instead.
             slope = newton_direction(problem, system, x, ws, false, &mut stats)?;
         }
-        // A step already below the tolerance is taken whole: its merit change is rounding.
         let mut full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
-        let limit = DIVERGENCE_LENGTHS * system.rod().material().rest_length;
-        if full > limit {
-            return Err(IntegratorError::Diverged { step: full, limit });
-        }
+        tracker.check_divergence(full)?;
         if let Some(cap) = params.max_step.filter(|&cap| full > cap) {
             ws.dx.iter_mut().for_each(|d| *d *= cap / full);
             full = cap;
         }
-        let search = params.line_search && full > tolerance;
-        let trust = converging(full, previous[0], tolerance);
         let step = Trial {
-            search,
-            trust,
+            search: params.line_search && tracker.searches(full),
+            trust: tracker.converging(full),
             slope,
         };
         let (t, reached) = line_search(problem, system, x, ws, step, merit, &mut stats)?;
         merit = reached;
         problem.on_step(t);
-        let stalled = full <= ROUND_OFF_BAND * tolerance
-            && full >= 0.5 * previous[0]
-            && previous[0] >= 0.5 * previous[1];
-        previous = [full, previous[0]];
-        let reach = if stalled {
-            ROUND_OFF_BAND * tolerance
-        } else {
-            tolerance
-        };
-        if problem.converged(full * t, reach) {
+        let within = |step: Real, reach: Real| problem.converged(step, reach);
+        if tracker.verdict_with(full, full * t, within).done() {
             stats.converged = true;
             break;
         }
@@ -479,24 +454,13 @@ pub(crate) fn negative_curvature(
     Ok(curvature)
 }
 
-/// Whether a full step of length `full` (after one of `previous`) is Newton converging
-/// near its solution: inside the round-off band and at most half the step before.
-/// There the merit's change, about \(\tfrac12 r \cdot \Delta x\), can sit below the
-/// merit's own rounding (the merit is a sum of terms far larger than their sum, e.g.
-/// gravity's), so the line search would halve the step on noise — and a halved step
-/// that then passes the step test stops Newton short of the solution by the part left
-/// out (a round-off difference then moves the result by up to the tolerance). Such a
-/// step is taken whole (if admissible): the next iteration measures it.
-pub(crate) fn converging(full: Real, previous: Real, tolerance: Real) -> bool {
-    full <= ROUND_OFF_BAND * tolerance && full < 0.5 * previous
-}
-
 /// What the line search is asked to do with a step.
 #[derive(Debug, Clone, Copy)]
 struct Trial {
     /// Search at all (else the full step is taken).
     search: bool,
-    /// Take the full step without the merit test ([`converging`]), if admissible.
+    /// Take the full step without the merit test
+    /// ([`ConvergenceTracker::converging`]), if admissible.
     trust: bool,
     /// The step's slope \(r \cdot \Delta x\).
     slope: Real,

@@ -125,6 +125,60 @@ pub(crate) fn factor_blocks(
     factor_blocks_with::<false>(u, n, bw)
 }
 
+/// The compiled instances of [`factor_blocks`] and [`solve_blocks`], for tests that run
+/// each whatever the process's kernel set is ([`splinerod_core::kernels`]; the table of
+/// every Cholesky variant, `crate::cholesky_variants`).
+#[cfg(test)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Instance {
+    /// The plain kernels (the portable set).
+    Plain,
+    /// The fused kernels on column-major blocks (the reference of the row form).
+    FusedColumns,
+    /// The fused kernels on row-major off-diagonal blocks (the avx2-fma set).
+    FusedRows,
+}
+
+#[cfg(test)]
+impl Instance {
+    /// Whether this processor runs it (the fused ones need AVX2 and FMA).
+    pub(crate) fn available(self) -> bool {
+        self == Instance::Plain || splinerod_core::kernels::KernelSet::Avx2Fma.available()
+    }
+
+    /// Factorises the band `u` (the layout of [`factor_blocks`]) in place and solves
+    /// `x` with the factor. Panics where the processor cannot run it.
+    pub(crate) fn factor_and_solve(
+        self,
+        u: &mut [Matrix3<Real>],
+        n: usize,
+        bw: usize,
+        x: &mut [Real],
+    ) -> Result<(), IntegratorError> {
+        assert!(self.available(), "{self:?} needs AVX2 and FMA");
+        match self {
+            Instance::Plain => {
+                factor_blocks_with::<false>(u, n, bw)?;
+                solve_blocks_with::<false, false>(u, n, bw, x);
+            }
+            // SAFETY (both): the processor has AVX2 and FMA (asserted above).
+            #[cfg(target_arch = "x86_64")]
+            Instance::FusedColumns => unsafe {
+                factor_blocks_wide(u, n, bw)?;
+                solve_blocks_with::<true, false>(u, n, bw, x);
+            },
+            #[cfg(target_arch = "x86_64")]
+            Instance::FusedRows => unsafe {
+                rows::factor_rows(u, n, bw)?;
+                solve_blocks_wide(u, n, bw, x);
+            },
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => unreachable!("checked by available"),
+        }
+        Ok(())
+    }
+}
+
 /// [`factor_blocks_with`] fused, compiled for AVX2 and FMA: the column-form fused
 /// factor, which [`rows::factor_rows`] equals bit for bit (transposed; tested).
 #[cfg(all(test, target_arch = "x86_64"))]

@@ -94,114 +94,35 @@ fn the_inverse_factor_is_the_column_by_column_choleskys_to_round_off() {
     }
 }
 
-/// An SPD band of `n` blocks and bandwidth `bw`: `Bᵀ B + I` for a random band `B`,
-/// stored as the upper band (the layout [`factor_blocks`] takes).
-fn spd_band(n: usize, bw: usize) -> Vec<Matrix3<Real>> {
-    let w = bw + 1;
-    let mut full = nalgebra::DMatrix::<Real>::identity(3 * n, 3 * n);
-    let b = nalgebra::DMatrix::from_fn(3 * n, 3 * n, |r, c| {
-        let near = (r / 3).abs_diff(c / 3) <= bw / 2;
-        if near {
-            ((r * 31 + c * 17) as Real * 0.37).sin()
-        } else {
-            0.0
-        }
-    });
-    full += b.transpose() * b;
-    let mut u = vec![Matrix3::zeros(); n * w];
-    for i in 0..n {
-        for k in 0..w.min(n - i) {
-            u[i * w + k] = full.fixed_view::<3, 3>(3 * i, 3 * (i + k)).into();
-        }
-    }
-    u
-}
-
-#[test]
-fn the_fused_and_the_plain_kernels_solve_alike_to_round_off() {
-    for (n, bw) in [(1, 0), (2, 1), (7, 3), (16, 5), (23, 5), (30, 2)] {
-        fused_and_plain_solve(n, bw);
-    }
-}
-
-/// The plain factor solves `A x = b` for an SPD band of `n` blocks and bandwidth `bw`,
-/// and the fused one (where the processor has FMA) gives the same `x` to round-off.
-fn fused_and_plain_solve(n: usize, bw: usize) {
-    let a = spd_band(n, bw);
-    let rhs: Vec<Real> = (0..3 * n).map(|k| (k as Real * 0.71).cos()).collect();
-    let solve = |fused: bool| {
-        let (mut u, mut x) = (a.clone(), rhs.clone());
-        if fused {
-            // SAFETY: only called where the processor has AVX2 and FMA.
-            #[cfg(target_arch = "x86_64")]
-            unsafe {
-                rows::factor_rows(&mut u, n, bw).expect("definite");
-                solve_blocks_wide(&u, n, bw, &mut x);
-            }
-        } else {
-            factor_blocks_with::<false>(&mut u, n, bw).expect("definite");
-            solve_blocks_with::<false, false>(&u, n, bw, &mut x);
-        }
-        x
-    };
-    let plain = solve(false);
-    // A x = b, through the band (upper blocks and their transposes).
-    let w = bw + 1;
-    let mut residual = rhs.clone();
-    for i in 0..n {
-        for k in 0..w.min(n - i) {
-            let block = a[i * w + k];
-            let (xi, xj) = (get3(&plain, i), get3(&plain, i + k));
-            let ri = get3(&residual, i) - block * xj;
-            set3(&mut residual, i, ri);
-            if k > 0 {
-                let rj = get3(&residual, i + k) - block.tr_mul(&xi);
-                set3(&mut residual, i + k, rj);
-            }
-        }
-    }
-    let scale = plain.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
-    let worst = residual.iter().fold(0.0, |m: Real, r| m.max(r.abs()));
-    assert!(
-        worst <= 1e-12 * scale.max(1.0),
-        "n {n}, bw {bw}: residual {worst:e}"
-    );
-    #[cfg(target_arch = "x86_64")]
-    if splinerod_core::lanes::wide() {
-        let fused = solve(true);
-        let gap = plain
-            .iter()
-            .zip(&fused)
-            .fold(0.0, |m: Real, (p, f)| m.max((p - f).abs()));
-        assert!(gap <= 1e-12 * scale, "n {n}, bw {bw}: gap {gap:e}");
-        assert_ne!(plain, fused, "the fused kernels round differently");
-    }
-}
-
+/// The fused factor by rows is the fused one by columns bit for bit, transposed, on
+/// every shape of the table of Cholesky variants (where both agree with the dense
+/// oracle: `crate::cholesky_variants`); and the fused kernels do round differently from
+/// the plain ones.
 #[test]
 #[cfg(target_arch = "x86_64")]
 fn the_row_form_factor_is_the_column_form_fused_one_bit_for_bit() {
-    if !splinerod_core::lanes::wide() {
+    if !Instance::FusedRows.available() {
         return;
     }
-    for (n, bw) in [(1, 0), (2, 1), (7, 3), (16, 3), (16, 5), (23, 5), (30, 2)] {
-        let mut a = spd_band(n, bw);
+    let mut rounded_differently = false;
+    for shape in crate::cholesky_variants::SHAPES {
+        let (n, bw) = (shape.n, shape.bw);
+        let mut a = shape.matrix(0).band_blocks().to_vec();
         // Assembly can leave a diagonal block asymmetric by round-off: both read its
         // lower triangle.
         for i in 0..n {
             a[i * (bw + 1)][(0, 1)] *= 1.0 + 1e-9;
             a[i * (bw + 1)][(1, 2)] *= 1.0 - 1e-9;
         }
-        let (mut rows, mut columns) = (a.clone(), a.clone());
-        let rhs: Vec<Real> = (0..3 * n).map(|k| (k as Real * 0.53).sin()).collect();
-        let (mut x_rows, mut x_columns) = (rhs.clone(), rhs);
-        // SAFETY: the processor has AVX2 and FMA (checked above).
-        unsafe {
-            rows::factor_rows(&mut rows, n, bw).expect("definite");
-            factor_blocks_wide(&mut columns, n, bw).expect("definite");
-            solve_blocks_wide(&rows, n, bw, &mut x_rows);
-        }
-        solve_blocks_with::<true, false>(&columns, n, bw, &mut x_columns);
+        let (mut rows, mut columns, mut plain) = (a.clone(), a.clone(), a);
+        let rhs = shape.rhs(0);
+        let (mut x_rows, mut x_columns, mut x_plain) = (rhs.clone(), rhs.clone(), rhs);
+        let solve = |kernel: Instance, u: &mut [Matrix3<Real>], x: &mut [Real]| {
+            kernel.factor_and_solve(u, n, bw, x).expect("definite");
+        };
+        solve(Instance::FusedRows, &mut rows, &mut x_rows);
+        solve(Instance::FusedColumns, &mut columns, &mut x_columns);
+        solve(Instance::Plain, &mut plain, &mut x_plain);
         let w = bw + 1;
         for i in 0..n {
             for k in 0..w.min(n - i) {
@@ -214,7 +135,9 @@ fn the_row_form_factor_is_the_column_form_fused_one_bit_for_bit() {
         }
         let bits = |x: &[Real]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&x_rows), bits(&x_columns), "n {n}, bw {bw}");
+        rounded_differently |= bits(&x_rows) != bits(&x_plain);
     }
+    assert!(rounded_differently, "the fused kernels round differently");
 }
 
 #[test]

@@ -10,9 +10,11 @@
 //! arithmetic loop ([`splinerod_core::lanes`]; the potential comes from a
 //! [`LanePotential`]) and the factorisation batched ([`BatchedBandedCholesky`]).
 //!
-//! Each lane makes the decisions of the scalar solver: it stops when its step moves no
-//! point by more than `tolerance · L` (or by the round-off band once its steps stall),
-//! and a converged lane stops moving while the others iterate. What the lockstep does
+//! Each lane makes the decisions of the scalar solver with its own
+//! [`ConvergenceTracker`] (the scalar solver's type, see [`crate::convergence`]): it
+//! stops when its step moves no point by more than `tolerance · L` (or by the round-off
+//! band once its steps stall), and a converged lane stops moving while the others
+//! iterate. What the lockstep does
 //! not replicate fails the lane alone ([`LaneEuler::outcome`] says why): a matrix that
 //! is not positive definite (the scalar solver then switches to an indefinite or
 //! definite factorisation), a step the line search would shorten, a solve that does not
@@ -31,8 +33,9 @@ mod pins;
 pub use fingerprint::fingerprint;
 
 use crate::batched::BatchedBandedCholesky;
+use crate::convergence::ConvergenceTracker;
 use crate::linear::LinearSolverKind;
-use crate::newton::{converging, NewtonParams, DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
+use crate::newton::NewtonParams;
 use crate::StepStats;
 use mass::{mass_bilinear, mass_times};
 use nalgebra::Vector3;
@@ -100,8 +103,8 @@ pub struct LaneEuler {
     mass: Vec<Lanes>,
     mass_bw: usize,
     alpha: Lanes,
-    tolerance: Lanes,
-    limit: Lanes,
+    /// Each lane's convergence decisions.
+    trackers: [ConvergenceTracker; LANES],
     /// Control points the pins hold, and their targets for `x`.
     pins: Vec<usize>,
     /// The knots `pin_points` were found on, and per pin (place, tangent, sliding) the
@@ -244,9 +247,7 @@ impl LaneEuler {
                 self.fail(l, "damping");
             }
             self.alpha[l] = alpha.unwrap_or(0.0);
-            let length = rod.material().rest_length;
-            self.tolerance[l] = params.tolerance * length;
-            self.limit[l] = DIVERGENCE_LENGTHS * length;
+            self.trackers[l] = ConvergenceTracker::new(params, rod.material().rest_length);
             for (i, (p, v)) in rod.positions.iter().zip(&rod.velocities).enumerate() {
                 for c in 0..3 {
                     self.q0[3 * i + c][l] = p[c];
@@ -280,9 +281,13 @@ impl LaneEuler {
             batched: 1,
             ..StepStats::default()
         }; LANES];
-        let mut previous = [[Real::INFINITY; 2]; LANES];
-        for _ in 0..params.max_iterations {
-            if !(0..LANES).any(|l| self.live(l)) {
+        loop {
+            // Live lanes have done the same iterations: all or none may start one.
+            let mut more = false;
+            for l in 0..LANES {
+                more |= self.live(l) && self.trackers[l].next_iteration();
+            }
+            if !more {
                 break;
             }
             let energy = self.assemble(potential, bandwidth, dt);
@@ -307,38 +312,31 @@ impl LaneEuler {
             let mut search = [false; LANES];
             let active: [bool; LANES] = std::array::from_fn(|l| self.live(l));
             for l in (0..LANES).filter(|&l| active[l]) {
+                let tracker = self.trackers[l];
                 let stats = &mut self.stats[l];
-                stats.newton_iterations += 1;
+                stats.newton_iterations = tracker.iterations();
                 stats.residual = residual[l];
                 if !(residual[l].is_finite() && full[l].is_finite()) {
                     self.fail(l, "non-finite step");
-                } else if full[l] > self.limit[l] {
+                } else if tracker.check_divergence(full[l]).is_err() {
                     self.fail(l, "diverged");
                 }
                 search[l] = params.line_search
-                    && full[l] > self.tolerance[l]
-                    && !converging(full[l], previous[l][0], self.tolerance[l])
+                    && tracker.searches(full[l])
+                    && !tracker.converging(full[l])
                     && slope[l] < 0.0
                     && self.feasible(l);
             }
             self.take_steps(potential, active, search, energy, slope, dt);
             for l in 0..LANES {
-                if !self.live(l) {
-                    continue;
-                }
-                let (tol, [p0, p1]) = (self.tolerance[l], previous[l]);
-                let stalled =
-                    full[l] <= ROUND_OFF_BAND * tol && full[l] >= 0.5 * p0 && p0 >= 0.5 * p1;
-                previous[l] = [full[l], p0];
-                let reach = if stalled { ROUND_OFF_BAND * tol } else { tol };
-                if full[l] <= reach {
+                // A lane takes its full step: the taken step is the full one.
+                if self.live(l) && self.trackers[l].verdict(full[l], full[l]).done() {
                     self.stats[l].converged = true;
                 }
             }
         }
-        let accepted = params.accept_unconverged || params.max_iterations == 1;
         for l in 0..LANES {
-            if !accepted && !self.stats[l].converged {
+            if !params.accepts(self.stats[l].converged) {
                 self.fail(l, "not converged");
             }
         }
