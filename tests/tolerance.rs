@@ -7,6 +7,7 @@ use splinerod::adaptive_study::{
     adaptive_start, adaptivity_table, scene, study_run, Answer, Problem, StudyRun,
 };
 use splinerod::prelude::*;
+use splinerod::problems::crossing::{self, Resolution, Variant, REFERENCE_POINTS};
 
 /// The uniform count (interpolated in log–log between measured runs) that reaches `error`.
 fn uniform_count_for(error: Real, uniform: &[(usize, Real)]) -> Real {
@@ -182,29 +183,9 @@ fn static_solves_report_an_honest_estimate() {
     }
 }
 
-/// The part of the upper rope's weight the lower one carries in
-/// `scenes/ropes_crossing_pinned.toml` (pins 2 and 3 hold the upper rope).
-fn crossing_lift(scene: &Scene) -> Real {
-    let r = splinerod::run(scene).expect("run");
-    let upper = &scene.rods[1];
-    let weight = upper.linear_density * upper.rest_length * 9.81;
-    (weight - r.pin_forces[2][1] - r.pin_forces[3][1]) / weight
-}
-
-/// The crossing scene with `n` control points per rope, adaptive or not, and the
-/// bending stiffnesses and radii of one variant.
-fn crossing(n: usize, adaptive: bool, variant: (Real, Real, Real, Real)) -> Scene {
-    let mut scene = Scene::load("scenes/ropes_crossing_pinned.toml").expect("scene");
-    let (ei_lower, ei_upper, r_lower, r_upper) = variant;
-    for (rod, ei, r) in [(0, ei_lower, r_lower), (1, ei_upper, r_upper)] {
-        scene.rods[rod].control_points = n;
-        scene.rods[rod].bending_stiffness = Some(ei);
-        scene.rods[rod].radius = Some(r);
-    }
-    if !adaptive {
-        scene.adaptivity = None;
-    }
-    scene
+/// The lift of the crossing ropes at `resolution`, with the ropes of `variant`.
+fn lift(resolution: Resolution, variant: Variant) -> Real {
+    crossing::run(resolution, Some(variant)).expect("run").0
 }
 
 /// #46: two pinned ropes crossing, both with bending. Tolerance adaptivity from 16
@@ -218,11 +199,24 @@ fn crossing_lift_from_16_adaptive_is_within_twice_the_uniform_64_error() {
         (1e-4, 5e-5, 0.008, 0.004),
         (3e-3, 1e-3, 0.012, 0.01),
     ];
-    for v in variants {
-        let exact = crossing_lift(&crossing(256, false, v));
-        let error = |n, adaptive| (crossing_lift(&crossing(n, adaptive, v)) - exact).abs() / exact;
-        let (uniform_16, uniform_64, adaptive) =
-            (error(16, false), error(64, false), error(16, true));
+    for (ei_lower, ei_upper, r_lower, r_upper) in variants {
+        let v = Variant {
+            ei_lower,
+            ei_upper,
+            r_lower,
+            r_upper,
+        };
+        let exact = lift(Resolution::Uniform(REFERENCE_POINTS), v);
+        let error = |r| (lift(r, v) - exact).abs() / exact;
+        let adaptive = Resolution::Adaptive {
+            start: 16,
+            tolerance: None,
+        };
+        let (uniform_16, uniform_64, adaptive) = (
+            error(Resolution::Uniform(16)),
+            error(Resolution::Uniform(64)),
+            error(adaptive),
+        );
         println!(
             "{v:?}: lift {exact:.5}; error uniform 16 {uniform_16:.2e}, uniform 64 \
              {uniform_64:.2e}, adaptive from 16 {adaptive:.2e}"

@@ -7,7 +7,13 @@
 //! * Taut string: the same rod stretched to 1.2 m between pins, no gravity; the first
 //!   transverse mode is f = 1/(2L)·√(T0/(γ0 μ)) and the first longitudinal
 //!   f = 1/(2L)·√(T'(γ0)/μ).
+//! * Crossing ([`crossing`]): two pinned ropes with bending, the upper resting on the
+//!   lower; the share of the upper rope's weight the lower one carries.
+//! * Capstan ([`capstan`]): a rope wound a full turn around a capsule slips when its
+//!   load ratio passes e^{2πμ}.
 
+pub mod capstan;
+pub mod crossing;
 pub mod elastic_catenary;
 pub mod hard_cases;
 pub mod locking;

@@ -1,7 +1,8 @@
 //! The report's adaptive-versus-uniform section (issue #13): the problems of
 //! [`crate::report::adaptive_study`] run adaptively over a sweep of tolerances and uniformly over
 //! a sweep of control points; true error against control points and against wall time,
-//! and the effectivity index (estimate / true error) of every run.
+//! and the effectivity index (estimate / true error) of every run. The section goes on
+//! with two contact problems, [`crate::report::crossing`] and [`crate::report::capstan`].
 
 use crate::output::plot::{line_plot, Series};
 use crate::report::adaptive_study::{adaptive_start, study_run, Answer, Problem, StudyRun};
@@ -64,7 +65,12 @@ pub fn markdown(out: &mut String, sweeps: &[AdaptiveSweep]) {
          still rings down) and on the hanging cable settled from a straight 4-point start \
          (exact elastic catenary at t = 10 s); problems in `splinerod::adaptive_study`. \
          Uniform runs report their estimate too (`[output] error_estimate`). Plots: \
-         `adaptive_<problem>_points.png` and `adaptive_<problem>_time.png`.\n\n"
+         `adaptive_<problem>_points.png` and `adaptive_<problem>_time.png`. Two contact \
+         problems follow: the **crossing** ropes, where the quantity is the lift (the \
+         share of the upper rope's weight the lower one carries), its relative error \
+         against control points and wall time; and the **capstan**, a rope wound a full \
+         turn around a capsule, where the quantity is the load ratio at which it slips, \
+         its relative error against e^(2πμ) per resolution.\n\n"
     );
     for s in sweeps {
         let _ = write!(

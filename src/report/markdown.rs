@@ -27,6 +27,8 @@ pub fn markdown(r: &Report, quick: bool) -> String {
     dynamics(&mut out, r);
     strings(&mut out, r);
     crate::report::adaptive::markdown(&mut out, &r.adaptive);
+    crate::report::crossing::markdown(&mut out, &r.crossing);
+    crate::report::capstan::markdown(&mut out, &r.capstan, quick);
     out
 }
 

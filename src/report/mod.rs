@@ -16,7 +16,9 @@
 //!   error ([`crate::problems::locking`]).
 //! * Adaptivity: tolerance-driven against uniform resolution, error against control
 //!   points and wall time, effectivity of the error estimate
-//!   ([`crate::report::adaptive`]).
+//!   ([`crate::report::adaptive`]); on two contact problems, the crossing ropes' lift
+//!   ([`crate::report::crossing`]) and the capstan's slip threshold
+//!   ([`crate::report::capstan`]).
 //!
 //! The catenary and string sweeps use the default (mixed) stretching; the static
 //! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
@@ -24,6 +26,8 @@
 
 pub mod adaptive;
 pub mod adaptive_study;
+pub mod capstan;
+pub mod crossing;
 mod markdown;
 
 use crate::output::plot::{line_plot, Series};
@@ -87,6 +91,10 @@ pub struct Report {
     pub strings: Vec<StringSample>,
     /// Adaptive against uniform resolution, per problem.
     pub adaptive: Vec<crate::report::adaptive::AdaptiveSweep>,
+    /// The crossing ropes' lift, adaptive against uniform.
+    pub crossing: crate::report::crossing::CrossingSweep,
+    /// The capstan's slip threshold per resolution (none with `quick`).
+    pub capstan: Vec<crate::report::capstan::CapstanRow>,
 }
 
 fn sizes(
@@ -156,6 +164,8 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
         }
     }
     report.adaptive = crate::report::adaptive::measure(quick)?;
+    report.crossing = crate::report::crossing::measure(quick)?;
+    report.capstan = crate::report::capstan::measure(quick)?;
     Ok(report)
 }
 
@@ -250,6 +260,8 @@ pub fn write_report(dir: &Path, quick: bool) -> Result<Report, Error> {
     let report = measure(quick)?;
     plot_all(dir, &report)?;
     crate::report::adaptive::plot(dir, &report.adaptive)?;
+    crate::report::crossing::plot(dir, &report.crossing)?;
+    crate::report::capstan::plot(dir, &report.capstan)?;
     let text = crate::report::markdown::markdown(&report, quick);
     let path = dir.join("report.md");
     std::fs::write(&path, text).map_err(|source| Error::Io {
