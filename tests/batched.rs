@@ -5,7 +5,7 @@
 //! batched form does not cover stepped alone with exactly their own result, fallbacks
 //! that change nothing, and no allocation per step.
 
-use splinerod::{Ensemble, Scene, Simulation};
+use splinerod::{Ensemble, Scene, Simulation, Unbatched};
 
 /// The bundled hanging cable as an ensemble of 10 (two groups of four and one of two)
 /// varying in stiffness, density and damping, shaken by up to 1 cm.
@@ -223,7 +223,35 @@ fn a_run_reports_its_batched_steps_and_can_turn_them_off() {
         batched.solver.batched_steps
     );
     assert_eq!(alone.solver.batched_steps, 0);
+    // Every member-step counted once: batched, or alone for a reason (JSON
+    // `solver.unbatched`); turned off, every one for that reason.
+    let steps = batched.solver.batched_steps + batched.solver.unbatched.total();
+    assert_eq!(steps, 9 * 100);
+    assert_eq!(alone.solver.unbatched.get(Unbatched::Off), 9 * 100);
+    assert_eq!(alone.solver.unbatched.total(), 9 * 100);
     for (a, b) in batched.ensemble.iter().zip(&alone.ensemble) {
         assert!((a.sag - b.sag).abs() <= 1e-12, "member {}", a.index);
     }
+}
+
+#[test]
+fn every_step_alone_carries_the_reason_of_the_one_decision() {
+    // `world/lanes.rs::batching` decides, before the lanes; each step's report keeps it.
+    let reasons = |text: &str, batched: bool| {
+        let mut ensemble = Ensemble::new(members(text));
+        ensemble.batched = batched;
+        ensemble.step(0.005).expect("step");
+        ensemble
+            .reports
+            .iter()
+            .map(|r| r.unbatched)
+            .collect::<Vec<_>>()
+    };
+    let cables = hanging_cables(5);
+    assert_eq!(reasons(&cables, false), vec![Some(Unbatched::Off); 5]);
+    let adaptive = cables.replace(
+        "[output]",
+        "[adaptivity]\ntolerance = 1e-4\nmax_control_points = 40\n\n[output]",
+    );
+    assert_eq!(reasons(&adaptive, true), vec![Some(Unbatched::Adaptive); 5]);
 }

@@ -12,7 +12,7 @@
 //! \\(\hat q = q_0\\), \\(\hat v = v_0\\) and β = ρ = h.
 
 use crate::incremental::{Increment, Stepper};
-use crate::lane_euler::{fingerprint, LaneOutcome};
+use crate::lane_euler::LaneOutcome;
 use crate::newton::NewtonParams;
 use crate::{Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -28,12 +28,18 @@ pub struct ImplicitEuler {
 }
 
 /// A step the batched form took ([`Integrator::preload`]), waiting for the step it is.
+///
+/// The step is recognised by its `dt` and a copy of its start state, compared with the
+/// rod's state bit for bit ([`same_bits`]): exact by construction, where a hash of the
+/// state (which this replaced, #47) could take another state for the start, and where a
+/// write counter on the rod would be exact only if every writer of its public fields
+/// counted. The copy reuses its buffers: no allocation once sized.
 #[derive(Debug, Default)]
 struct Preloaded {
     live: bool,
     dt: Real,
-    /// [`fingerprint`] of the start state.
-    start: u64,
+    /// The start state (positions, velocities) the step was taken from.
+    start: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
     end: (Vec<Vector3<Real>>, Vec<Vector3<Real>>),
     stats: StepStats,
     forces: Vec<Vector3<Real>>,
@@ -46,8 +52,20 @@ impl Preloaded {
         self.dt.to_bits() == dt.to_bits()
             && rod.positions.len() == self.end.0.len()
             && rod.velocities.len() == self.end.1.len()
-            && fingerprint(&rod.positions, &rod.velocities) == self.start
+            && same_bits(&rod.positions, &self.start.0)
+            && same_bits(&rod.velocities, &self.start.1)
     }
+}
+
+/// Whether two fields are equal bit for bit: the same length and every coordinate's
+/// [`f64::to_bits`] equal (so `-0.0` is not `0.0`, and a NaN is only itself).
+fn same_bits(a: &[Vector3<Real>], b: &[Vector3<Real>]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.iter()
+                .zip(y.iter())
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+        })
 }
 
 impl ImplicitEuler {
@@ -98,7 +116,10 @@ impl Integrator for ImplicitEuler {
         dt: Real,
     ) {
         let p = &mut self.preloaded;
-        p.start = fingerprint(start.0, start.1);
+        p.start.0.clear();
+        p.start.0.extend_from_slice(start.0);
+        p.start.1.clear();
+        p.start.1.extend_from_slice(start.1);
         p.end.0.clear();
         p.end.0.extend_from_slice(outcome.positions);
         p.end.1.clear();

@@ -227,7 +227,7 @@ pub trait Integrator: Send + Sync {
     }
     /// Hands the scheme the step of `dt` the batched form took from the state
     /// `start` (positions, velocities): the next [`step`](Integrator::step) of the same
-    /// `dt` from that state (recognised by its [`lane_euler::fingerprint`]) takes it
+    /// `dt` from that state (recognised exactly: the same bits) takes it
     /// instead of solving; any other step ignores it. Default: ignored.
     fn preload(
         &mut self,

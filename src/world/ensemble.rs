@@ -69,11 +69,7 @@ impl Ensemble {
     pub fn step(&mut self, dt: Real) -> Result<(), Error> {
         let batched = self.batched;
         let prepare = move |group: &mut [Simulation], alone: &mut [Option<Unbatched>]| {
-            if batched {
-                preload_group(group, dt, alone);
-            } else {
-                alone.fill(Some(Unbatched::Off));
-            }
+            preload_group(group, dt, batched, alone);
         };
         self.each(prepare, |sim| sim.step(dt), true)
     }
@@ -156,10 +152,8 @@ where
                 continue;
             }
             if self.timed {
-                // A member prepared but not batched: its step was not the one solved.
                 let why = alone.get(j).copied().flatten();
-                let taken = report.solver.batched > 0;
-                report.unbatched = (!taken).then_some(why.unwrap_or(Unbatched::NotTaken));
+                report.unbatched = Unbatched::of_step(why, report.solver.batched > 0);
             }
         }
         failed

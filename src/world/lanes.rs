@@ -16,8 +16,9 @@
 //! shape of the first of them (the same knots and pins); a lane left over repeats the
 //! first member and its result is dropped, so a group of one member, or a member of a
 //! shape of its own, is solved in the lanes too. Whether a member can be batched is
-//! decided by [`decide`] from the member alone, which returns the reason
-//! ([`Unbatched`]) when it cannot: its integrator has a batched form
+//! decided in one place, [`batching`], from the ensemble's setting, the step's `dt` and
+//! the member alone, which returns the reason ([`Unbatched`]) when it cannot: batching
+//! is on ([`crate::Ensemble::batched`]), `dt` is finite and positive, its integrator has a batched form
 //! ([`Integrator::lane_params`], implicit Euler), its step is taken whole (no shorter
 //! sub-step pending), it does not adapt its knots (whose decisions a round-off
 //! difference could flip), it has no driven pins and no time-dependent energy, and
@@ -80,12 +81,26 @@ impl LanePotential for Terms<'_> {
 }
 
 /// The batching decision of one member for its step of `dt`, before any lanes are
-/// formed: the Newton settings of its batched step, or why it steps alone. Only the
-/// member's own state decides (see the module docs); the step's own `begin_step` is
-/// idempotent (`Energy::lane_term`'s contract), so calling it here changes nothing.
-/// The solve can still hand a member back ([`Unbatched::Solver`], [`Unbatched::Terms`]
-/// and the lane failures, from [`solve_lanes`]).
-pub(crate) fn decide(sim: &mut Simulation, dt: Real) -> Result<NewtonParams, Unbatched> {
+/// formed, and the only one: the Newton settings of its batched step, or why it steps
+/// alone. `enabled` is the ensemble's setting ([`crate::Ensemble::batched`]: off, every
+/// member steps alone, [`Unbatched::Off`]); a `dt` that is not finite and positive is
+/// no step the lanes take ([`Unbatched::Solver`]); past those only the member's own
+/// state decides (see the module docs). The step's own `begin_step` is idempotent
+/// (`Energy::lane_term`'s contract), so calling it here changes nothing. The solve can
+/// still hand a member back ([`Unbatched::Terms`], [`Unbatched::Solver`] and the lane
+/// failures, from [`solve_lanes`]), and the member's step record one it did not take
+/// ([`Unbatched::of_step`]).
+pub(crate) fn batching(
+    sim: &mut Simulation,
+    dt: Real,
+    enabled: bool,
+) -> Result<NewtonParams, Unbatched> {
+    if !enabled {
+        return Err(Unbatched::Off);
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(Unbatched::Solver);
+    }
     let params = sim.integrator.lane_params().ok_or(Unbatched::Scheme)?;
     if !sim.substep.memory().next.is_none_or(|h| h >= dt) {
         return Err(Unbatched::SubStep);
@@ -145,16 +160,22 @@ fn same_forms(a: &Simulation, b: &Simulation) -> bool {
 }
 
 /// Solves the step of `dt` of the members of `group` (at most [`LANES`], consecutive)
-/// that can be batched ([`decide`]), [`LANES`] of one shape at a time, and preloads each
+/// that can be batched ([`batching`], with the ensemble's setting `enabled`), [`LANES`] of one shape at a time, and preloads each
 /// one's integrator with its result; `alone[i]` is set to why member `i` steps alone,
 /// `None` for a member preloaded. A member's result does not depend on the others in
 /// its group: lanes never mix, a lane that fails leaves only its own member to step
 /// alone, and lanes left over repeat a member (so a member with no lane-mates, a group
 /// of one, is solved in the lanes too). Members left out are untouched: their own step
 /// solves as usual.
-pub(crate) fn preload_group(group: &mut [Simulation], dt: Real, alone: &mut [Option<Unbatched>]) {
+pub(crate) fn preload_group(
+    group: &mut [Simulation],
+    dt: Real,
+    enabled: bool,
+    alone: &mut [Option<Unbatched>],
+) {
     let mut params = [None; LANES];
-    if !(dt.is_finite() && dt > 0.0) || group.len() > LANES || alone.len() != group.len() {
+    if group.len() > LANES || alone.len() != group.len() {
+        // A caller's error, not a member's: no lanes for a group that does not fit.
         alone.fill(Some(Unbatched::Solver));
         return;
     }
@@ -163,7 +184,7 @@ pub(crate) fn preload_group(group: &mut [Simulation], dt: Real, alone: &mut [Opt
         .zip(group.iter_mut())
         .zip(alone.iter_mut())
     {
-        match decide(sim, dt) {
+        match batching(sim, dt, enabled) {
             Ok(settings) => (*p, *why) = (Some(settings), None),
             Err(reason) => *why = Some(reason),
         }

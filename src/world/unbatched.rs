@@ -98,6 +98,15 @@ impl Unbatched {
         }
     }
 
+    /// Why a member's step was solved alone, recorded after the step: `decided`, the
+    /// reason [`crate::world::lanes`] gave before or during the batched solve (`None`:
+    /// its step was preloaded), and whether the step `taken` was the batched one. A
+    /// preloaded step the member did not take (another `dt`, another start) is
+    /// [`Unbatched::NotTaken`]; a batched step is `None`.
+    pub(crate) fn of_step(decided: Option<Unbatched>, taken: bool) -> Option<Unbatched> {
+        (!taken).then_some(decided.unwrap_or(Unbatched::NotTaken))
+    }
+
     /// The reason of a lane the batched solver failed with `why`
     /// ([`splinerod_integrators::lane_euler::LaneFallback`]).
     pub(crate) fn of_lane(why: &str) -> Unbatched {

@@ -26,11 +26,8 @@
 //! of failed lanes one by one, so a failure changes no result; each lane's result
 //! equals the scalar solver's up to round-off.
 
-mod fingerprint;
 mod mass;
 mod pins;
-
-pub use fingerprint::fingerprint;
 
 use crate::batched::BatchedBandedCholesky;
 use crate::convergence::ConvergenceTracker;
