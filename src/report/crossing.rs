@@ -116,8 +116,8 @@ pub fn measure(quick: bool) -> Result<CrossingSweep, Error> {
 pub fn markdown(out: &mut String, s: &CrossingSweep) {
     let finer = s.finer.map_or(String::new(), |f| {
         format!(
-            " (512 per rope gives {f:.6}, {:.1e} from it: the floor below which the \
-             errors are the reference's)",
+            "; 512 per rope gives {f:.6}, {:.1e} from it: the floor below which the \
+             errors are the reference's",
             (f - s.reference).abs() / s.reference
         )
     });
@@ -127,7 +127,7 @@ pub fn markdown(out: &mut String, s: &CrossingSweep) {
          `scenes/ropes_crossing_pinned.toml`, a static solve: the relative error of the \
          lift, the share of the upper rope's weight the lower rope carries, against a \
          uniform run with {REFERENCE_POINTS} control points per rope (lift \
-         {:.6}){finer}. Adaptive runs start from {ADAPTIVE_START} per rope with the \
+         {:.6}{finer}). Adaptive runs start from {ADAPTIVE_START} per rope with the \
          scene's `[adaptivity]` table, the tolerance swept (the scene's is {}). Control \
          points are both ropes' at the end; wall times the best of the repeats.\n\n\
          ![lift error vs control points](adaptive_crossing_points.png)\n\n\
