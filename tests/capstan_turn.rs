@@ -31,9 +31,20 @@ fn slip_ratio(mu: f64) -> (f64, f64, usize) {
     (turn.ratio_at(t), run.clearance, run.pairs)
 }
 
+/// At μ = 0.3 (for CI's time; every μ: `…_at_every_friction`, ignored).
 #[test]
 fn a_rope_wound_a_full_turn_slips_at_the_capstan_ratio() {
-    for mu in [0.1, 0.3, 0.5] {
+    slips_at_the_capstan_ratio(&[0.3]);
+}
+
+#[test]
+#[ignore = "about 15 s; run with --ignored"]
+fn a_rope_wound_a_full_turn_slips_at_the_capstan_ratio_at_every_friction() {
+    slips_at_the_capstan_ratio(&[0.1, 0.3, 0.5]);
+}
+
+fn slips_at_the_capstan_ratio(frictions: &[f64]) {
+    for &mu in frictions {
         let threshold = capstan_ratio(mu);
         let (ratio, clearance, pairs) = slip_ratio(mu);
         let error = ratio / threshold - 1.0;
@@ -69,12 +80,24 @@ fn coarse_slides(mu: f64, ratio: f64, duration: f64) -> (bool, usize, f64) {
     (run.slip_time.is_some(), run.start_points, run.clearance)
 }
 
+/// Over 1 s, slip judged in its second half (for CI's time; over 2.5 s:
+/// `…_over_two_and_a_half_seconds`, ignored; both refine to 45 points and agree).
 #[test]
 fn a_full_turn_fitted_with_eight_control_points_runs_and_holds_below_the_capstan_ratio() {
+    eight_points_hold_below_and_slide_above(1.0);
+}
+
+#[test]
+#[ignore = "about 30 s; run with --ignored"]
+fn a_full_turn_fitted_with_eight_control_points_holds_over_two_and_a_half_seconds() {
+    eight_points_hold_below_and_slide_above(2.5);
+}
+
+fn eight_points_hold_below_and_slide_above(duration: f64) {
     let mu = 0.3;
     let threshold = capstan_ratio(mu);
-    let (held_slides, points, held_clearance) = coarse_slides(mu, 0.75 * threshold, 2.5);
-    let (slid, _, slid_clearance) = coarse_slides(mu, 1.33 * threshold, 2.5);
+    let (held_slides, points, held_clearance) = coarse_slides(mu, 0.75 * threshold, duration);
+    let (slid, _, slid_clearance) = coarse_slides(mu, 1.33 * threshold, duration);
     eprintln!(
         "8 control points refined to {points}: at 0.75 e^(2πμ) slides {held_slides} (clearance {held_clearance:.3}), at 1.33 e^(2πμ) slides {slid} (clearance {slid_clearance:.3})"
     );

@@ -174,9 +174,15 @@ pub struct FormRow {
 
 /// The default-form study over [`SHAPES`] and [`FORM_STIFFNESSES`].
 pub fn form_study() -> Result<Vec<FormRow>, Error> {
+    form_study_of(&SHAPES, &FORM_STIFFNESSES)
+}
+
+/// The default-form study over `shapes` × `stiffnesses` (N), at every one of
+/// [`RESOLUTIONS`].
+pub fn form_study_of(shapes: &[Shape], stiffnesses: &[Real]) -> Result<Vec<FormRow>, Error> {
     let mut rows = Vec::new();
-    for shape in SHAPES {
-        for ea in FORM_STIFFNESSES {
+    for &shape in shapes {
+        for &ea in stiffnesses {
             let mut row = FormRow {
                 shape,
                 stiffness: ea,

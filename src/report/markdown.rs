@@ -147,7 +147,8 @@ fn locking(out: &mut String, r: &Report) {
 fn forms(out: &mut String, r: &Report) {
     out.push_str(
         "## The default stretching on soft and stiff rods (issue #44)\n\n\
-         Static catenaries of four shapes (`L` m, pins `D` m apart, `μ` kg/m) started on \
+         Static catenaries (`L` m, pins `D` m apart, `μ` kg/m; `--quick`: one shape, two \
+         stiffnesses) started on \
          the exact elastic catenary, max material-point error (m) of each form and of the \
          default (`\"auto\"`, the form it chose in brackets: `c` consistent, `l` lumped). \
          Which to pick: leave the default; it takes the consistent mixed form where the \
