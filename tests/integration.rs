@@ -52,6 +52,7 @@ mod refinement;
 mod refused_up_front;
 mod resume;
 mod robustness;
+mod run_imports;
 mod scene_errors;
 mod scenes;
 mod session;

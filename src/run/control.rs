@@ -21,7 +21,7 @@
 //! outputs but writes no checkpoint at the stop
 //! ([`crate::RunResult::checkpoint_at_stop`]).
 
-use crate::run::main_loop::{restored_run, Run};
+use crate::run::state::{restored_run, Run};
 use crate::scene::Scene;
 use crate::world::saved::SimulationState;
 use crate::Error;

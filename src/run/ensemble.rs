@@ -1,7 +1,7 @@
 //! The summary of each member of an ensemble run (JSON `ensemble[i]`).
 
-use crate::run::runner::ContactStats;
 use crate::run::tally::Tally;
+use crate::run::totals::ContactStats;
 use crate::{Error, Scene, Simulation};
 use serde::Serialize;
 use splinerod_core::Real;

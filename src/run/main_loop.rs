@@ -5,9 +5,14 @@
 //! stages: a static scene is one [`Simulation::settle`] (the equilibrium under the
 //! grabs' final targets, re-solved while adaptivity changes the knots), a dynamic one
 //! `step_count` calls of [`Simulation::step`]. After each stage every member records in
-//! its own [`Tally`] — solver counters, energy summaries (contacts), error estimates,
-//! knot tracking, due cuts, the control-point history, probes — and observers see
-//! member 0. Cuts due at the start (all of them for a static scene) are made first.
+//! its own tally (`tally.rs`: solver counters, energy summaries (contacts), error
+//! estimates, knot tracking, due cuts, the control-point history, probes) and observers
+//! see member 0. Cuts due at the start (all of them for a static scene) are made first.
+//! The run's members and counters are a `state::Run`; at the end the loop reads the
+//! result off it ([`crate::run::result`]).
+//!
+//! This file owns the loop: it calls the observers, the tallies, the undo
+//! ([`crate::run::control`]) and the checkpoint writer, and none of them calls back.
 //!
 //! A [`RunControl`] may stop the loop before a stage (a signal, `max_steps`), or inside
 //! one (the solvers abandon it; [`crate::run::control`] puts the run back as it stood
@@ -17,84 +22,19 @@
 //! stage after it ([`crate::run::checkpoint`]).
 
 use crate::run::checkpoint::{Checkpoint, CheckpointPlan, MemberState};
-use crate::run::control::Undo;
+use crate::run::control::{RunControl, Undo};
 use crate::run::ensemble::summarize;
-use crate::run::observe::Observer;
-use crate::run::runner::{finish, frame, notify_finish, RunControl, RunResult, SolverTotals};
-use crate::run::tally::{CutSchedule, Tally};
+use crate::run::observe::{Frame, Observer};
+use crate::run::result::{finish, median, RunResult};
+use crate::run::state::{
+    check_memory, fresh_run, mismatched_checkpoint, restored_run, Member, Run,
+};
+use crate::run::totals::SolverTotals;
 use crate::scene::{Method, Scene};
-use crate::world::saved::SimulationState;
-use crate::{Ensemble, Error, Simulation};
+use crate::{Ensemble, Error, RodSystem, Simulation};
 use splinerod_core::{Cancel, Real};
 use std::ops::Range;
 use std::time::Instant;
-
-/// Step times reserved up front (more grow the vector as the run goes).
-const STEP_TIMES_RESERVED: usize = 1 << 16;
-
-/// One member of a run.
-pub(crate) struct Member {
-    pub(crate) scene: Scene,
-    pub(crate) tally: Tally,
-}
-
-/// The members of `scene`: the ensemble's (those of `only`, if given), or the scene
-/// itself.
-pub(crate) fn build_members(
-    scene: &Scene,
-    only: Option<&Range<usize>>,
-) -> Result<Vec<(Scene, Simulation)>, Error> {
-    match &scene.ensemble {
-        Some(spec) => {
-            let all = 0..spec.count;
-            let range = only.cloned().unwrap_or(all);
-            range.map(|i| spec.member(scene, i)).collect()
-        }
-        None => Ok(vec![(scene.clone(), scene.build()?)]),
-    }
-}
-
-/// Prepares a member for its first stage: a static solve starts at the time the grabs,
-/// driven pins, turning clamps, moving obstacles and keyframed loads reach their final
-/// targets, with every cut made; a dynamic one with the cuts due at time zero.
-fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Result<(), Error> {
-    if scene.solver.method == Method::Static {
-        let grabs = scene.grabs.iter().map(|g| g.end_time);
-        let paths = sim.system.drivers.iter().map(|d| d.path.end_time());
-        let loads = sim.system.loads.iter().filter_map(|l| l.path.as_ref());
-        let loads = loads.map(|p| p.end_time());
-        let turns = scene
-            .pins
-            .iter()
-            .filter_map(|p| p.turn.as_ref()?.last().map(|k| k[0]));
-        let moving = scene
-            .obstacles
-            .iter()
-            .filter_map(|o| o.motion().0?.last().map(|k| k[0]));
-        let t = grabs
-            .chain(paths)
-            .chain(loads)
-            .chain(moving)
-            .chain(turns)
-            .fold(0.0, Real::max);
-        (sim.time, sim.system.time) = (t, t);
-        cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))
-    } else {
-        cuts.apply(0.0, 0.0, |s| sim.cut(s))
-    }
-}
-
-/// A run under way: its members, the loop's counters and what it measured.
-pub(crate) struct Run {
-    pub(crate) members: Vec<Member>,
-    pub(crate) ensemble: Ensemble,
-    pub(crate) step_seconds: Vec<Real>,
-    /// Stages done.
-    pub(crate) stage: usize,
-    /// Wall time of the stages a checkpointed run did before this process.
-    pub(crate) wall_before: Real,
-    pub(crate) only: Option<Range<usize>>,
-}
 
 /// Runs `scene` to its end (only the ensemble members of `only`, if given), showing
 /// every stage of its first member to `observers`.
@@ -112,76 +52,6 @@ pub(crate) fn run_scene(
         o.start(&frame(scene, &lead.system, lead.time, 0))?;
     }
     advance(scene, run, observers, control)
-}
-
-impl Run {
-    /// Makes every member's solvers poll `cancel`.
-    pub(crate) fn set_cancel(&mut self, cancel: &Cancel) {
-        for sim in &mut self.ensemble.members {
-            sim.system.cancel = cancel.clone();
-        }
-    }
-}
-
-/// The members of `scene` (of `only`) built, prepared and tallied at their start;
-/// [`Error::Interrupted`] if `cancel` asks to stop meanwhile.
-pub(crate) fn fresh_run(
-    scene: &Scene,
-    only: Option<&Range<usize>>,
-    cancel: &Cancel,
-) -> Result<Run, Error> {
-    let mut members = Vec::new();
-    let mut sims = Vec::new();
-    for (member_scene, mut sim) in build_members(scene, only)? {
-        if cancel.requested() {
-            return Err(Error::Interrupted("while the members were built"));
-        }
-        let mut cuts = CutSchedule::new(&member_scene)?;
-        prepare(&member_scene, &mut sim, &mut cuts)?;
-        let mut tally = Tally::new(&member_scene, &sim.system)?;
-        tally.cuts = cuts;
-        members.push(Member {
-            scene: member_scene,
-            tally,
-        });
-        sims.push(sim);
-    }
-    Ok(Run {
-        members,
-        ensemble: ensemble_of(scene, sims, only),
-        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
-        stage: 0,
-        wall_before: 0.0,
-        only: only.cloned(),
-    })
-}
-
-/// The cost of a checkpoint (`bench` key `checkpoint_us_16`): `scene` run for `steps`
-/// steps, then its checkpoint written into `plan.dir` `repeats` times; the median
-/// write's wall time (s, encoding, writing, `fsync` and rename) and the file's size.
-pub(crate) fn checkpoint_cost(
-    scene: &Scene,
-    steps: usize,
-    plan: &CheckpointPlan,
-    repeats: usize,
-) -> Result<(Real, u64), Error> {
-    let mut run = fresh_run(scene, None, &Cancel::none())?;
-    let dt = scene.solver.dt.unwrap_or_default();
-    for _ in 0..steps {
-        stage(scene, &mut run, &mut [], false, dt)?;
-    }
-    let mut times = Vec::with_capacity(repeats);
-    for _ in 0..repeats.max(1) {
-        let start = Instant::now();
-        save(plan, &run, &mut [], start)?;
-        times.push(start.elapsed().as_secs_f64());
-    }
-    let path = plan.dir.join(crate::run::checkpoint::FILE);
-    let bytes = std::fs::metadata(&path).map_err(|source| Error::Io {
-        path: path.display().to_string(),
-        source,
-    })?;
-    Ok((crate::run::runner::median(&mut times), bytes.len()))
 }
 
 /// Continues the run of `checkpoint` (of `scene`, its scene text parsed).
@@ -207,65 +77,6 @@ pub(crate) fn resume_scene(
         o.resume(&now, state.as_deref())?;
     }
     advance(scene, run, observers, control)
-}
-
-/// The members of `scene` (those of `only`) rebuilt and put in the saved `states`
-/// (simulation state and tally, one per member), `stages` stages into the run.
-pub(crate) fn restored_run(
-    scene: &Scene,
-    only: Option<Range<usize>>,
-    states: impl ExactSizeIterator<Item = (SimulationState, Tally)>,
-    stages: usize,
-) -> Result<Run, Error> {
-    let built = build_members(scene, only.as_ref())?;
-    if built.len() != states.len() {
-        return Err(mismatched_checkpoint(states.len()));
-    }
-    let mut members = Vec::new();
-    let mut sims = Vec::new();
-    for ((member_scene, mut sim), (state, tally)) in built.into_iter().zip(states) {
-        sim.restore_state(&state)?;
-        members.push(Member {
-            scene: member_scene,
-            tally,
-        });
-        sims.push(sim);
-    }
-    Ok(Run {
-        members,
-        ensemble: ensemble_of(scene, sims, only.as_ref()),
-        step_seconds: Vec::with_capacity(scene.step_count().min(STEP_TIMES_RESERVED)),
-        stage: stages,
-        wall_before: 0.0,
-        only,
-    })
-}
-
-/// The ensemble of `sims` (batched as `scene`'s `[ensemble]` says; a single run is
-/// never batched), numbered from the first member of `only` (a shard's), so that it
-/// batches its members as a run of the whole ensemble does.
-fn ensemble_of(scene: &Scene, sims: Vec<Simulation>, only: Option<&Range<usize>>) -> Ensemble {
-    let mut ensemble = Ensemble::new(sims);
-    ensemble.first_index = only.map_or(0, |r| r.start);
-    ensemble.batched = scene.ensemble.as_ref().is_some_and(|e| e.batched);
-    ensemble
-}
-
-/// A checkpoint of `members` members that does not fit the scene and command line.
-fn mismatched_checkpoint(members: usize) -> Error {
-    Error::field(
-        "checkpoint",
-        members,
-        "members or outputs do not match the scene and command line",
-    )
-}
-
-/// Refuses a run whose memory could not exist (for a shard: its members only).
-pub(crate) fn check_memory(scene: &Scene, only: Option<&Range<usize>>) -> Result<(), Error> {
-    match only {
-        Some(range) => scene.with_member_count(range.len()).check_memory(),
-        None => scene.check_memory(),
-    }
 }
 
 /// The stages of `run` from where it stands to the end (or until `control` stops it,
@@ -477,4 +288,54 @@ fn ensemble_totals(members: &[Member]) -> SolverTotals {
         total += m.tally.solver;
     }
     total
+}
+
+fn frame<'a>(scene: &'a Scene, system: &'a RodSystem, time: Real, step: usize) -> Frame<'a> {
+    let total_steps = scene.step_count();
+    Frame {
+        scene,
+        system,
+        time,
+        step,
+        total_steps,
+    }
+}
+
+fn notify_finish(
+    observers: &mut [&mut dyn Observer],
+    frame: &Frame<'_>,
+    result: RunResult,
+) -> Result<RunResult, Error> {
+    for o in observers.iter_mut() {
+        o.finish(frame, &result)?;
+    }
+    Ok(result)
+}
+
+/// The cost of a checkpoint (`bench` key `checkpoint_us_16`): `scene` run for `steps`
+/// steps, then its checkpoint written into `plan.dir` `repeats` times; the median
+/// write's wall time (s, encoding, writing, `fsync` and rename) and the file's size.
+pub(crate) fn checkpoint_cost(
+    scene: &Scene,
+    steps: usize,
+    plan: &CheckpointPlan,
+    repeats: usize,
+) -> Result<(Real, u64), Error> {
+    let mut run = fresh_run(scene, None, &Cancel::none())?;
+    let dt = scene.solver.dt.unwrap_or_default();
+    for _ in 0..steps {
+        stage(scene, &mut run, &mut [], false, dt)?;
+    }
+    let mut times = Vec::with_capacity(repeats);
+    for _ in 0..repeats.max(1) {
+        let start = Instant::now();
+        save(plan, &run, &mut [], start)?;
+        times.push(start.elapsed().as_secs_f64());
+    }
+    let path = plan.dir.join(crate::run::checkpoint::FILE);
+    let bytes = std::fs::metadata(&path).map_err(|source| Error::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    Ok((median(&mut times), bytes.len()))
 }

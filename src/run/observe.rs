@@ -1,11 +1,12 @@
 //! Observers of a run: whatever wants to see the state as it evolves (pictures, ParaView
 //! files, per-step statistics, a progress bar) implements [`Observer`] and is handed to
-//! [`crate::run::runner::run_observed`]. The runner calls [`Observer::start`] once before the
+//! [`crate::run::runner::run_observed`]. The run loop calls [`Observer::start`] once before the
 //! first step, [`Observer::step`] after every step (after adaptivity and cuts), and
 //! [`Observer::finish`] with the final result. A static solve is one stage: `start`
 //! sees the initial state, `step` (with step count 0) and `finish` the equilibrium.
 
-use crate::{Error, RodSystem, RunResult, Scene, StepReport};
+use crate::run::result::RunResult;
+use crate::{Error, RodSystem, Scene, StepReport};
 use splinerod_core::Real;
 
 /// The state an observer sees.

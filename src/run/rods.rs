@@ -3,11 +3,22 @@
 //! it; contact acts between rods and stays in the top-level `energy`) and the forces of
 //! its pins.
 
-use crate::run::runner::Samples;
 use crate::{Error, RodSystem, Scene};
 use serde::Serialize;
 use splinerod_core::Real;
 use std::collections::BTreeMap;
+
+/// Positions of evenly spaced material points at the end.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Samples {
+    /// Material coordinates, fractions of the rest length.
+    pub s: Vec<Real>,
+    /// Their positions, m.
+    pub positions: Vec<[Real; 3]>,
+    /// Axial tension there, N (the stretching energy's tension field; absent without one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub tension: Vec<Real>,
+}
 
 /// One rod of a `[[rods]]` scene at the end of a run.
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -24,7 +35,7 @@ pub struct RodOutput {
     pub energy: BTreeMap<String, Real>,
     /// The forces of the `[[pins]]` entries naming it, in file order, N.
     pub pin_forces: Vec<[Real; 3]>,
-    /// The stretching form it used (see [`crate::run::runner::RodModel`]).
+    /// The stretching form it used (see [`crate::run::result::RodModel`]).
     pub stretch_formulation_used: String,
 }
 

@@ -9,8 +9,9 @@
 //! reports, bit for bit but the wall-clock fields.
 
 use crate::run::control::Undo;
-use crate::run::main_loop::{self, Run};
-use crate::run::runner::RunResult;
+use crate::run::main_loop;
+use crate::run::result::RunResult;
+use crate::run::state::{self, Run};
 use crate::scene::{Method, Scene};
 use crate::{Error, Simulation};
 use nalgebra::Vector3;
@@ -40,10 +41,10 @@ impl SceneRun {
     /// The run of `scene` at its start: every member built, the cuts due at time zero
     /// made (a static scene: at the grabs' and paths' final time, with every cut).
     pub fn new(scene: &Scene) -> Result<Self, Error> {
-        main_loop::check_memory(scene, None)?;
+        state::check_memory(scene, None)?;
         Ok(Self {
             scene: scene.clone(),
-            run: main_loop::fresh_run(scene, None, &Cancel::none())?,
+            run: state::fresh_run(scene, None, &Cancel::none())?,
             cancel: Cancel::none(),
             undo: Undo::default(),
         })
@@ -130,7 +131,7 @@ impl SceneRun {
     /// stage, N (as the JSON's `pin_forces`); `None` past the last member.
     pub fn pin_forces(&self, index: usize) -> Option<Vec<Vector3<Real>>> {
         let sim = self.members().get(index)?;
-        let forces = crate::run::runner::scene_pin_forces(&self.scene, sim);
+        let forces = crate::run::pins::scene_pin_forces(&self.scene, sim);
         Some(forces.into_iter().map(Vector3::from).collect())
     }
 
@@ -144,7 +145,7 @@ impl SceneRun {
         let states: Vec<_> = states.collect();
         let only = self.run.only.clone();
         let first_index = only.as_ref().map_or(0, |r| r.start);
-        let copy = main_loop::restored_run(&self.scene, only, states.into_iter(), 0)?;
+        let copy = state::restored_run(&self.scene, only, states.into_iter(), 0)?;
         let (mut members, mut sims) = (copy.members, copy.ensemble.members);
         main_loop::close(&mut members, &mut sims)?;
         let mut step_seconds = self.run.step_seconds.clone();

@@ -18,7 +18,7 @@
 //! never depend on its lane-mates (`world/lanes.rs`). `N` may be at most the number of
 //! members; more is refused for every `K`.
 
-use crate::run::runner::SolverTotals;
+use crate::run::totals::SolverTotals;
 use crate::{Error, Scene};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;

@@ -2,8 +2,9 @@
 //! what does not (an energy that is exactly zero at the end, contact that never
 //! touched).
 
-use crate::run::runner::ContactStats;
-use crate::RunResult;
+use crate::run::ensemble::MemberSummary;
+use crate::run::result::RunResult;
+use crate::run::totals::ContactStats;
 
 impl RunResult {
     /// A short human summary: steps, control points, wall time, final energies.
@@ -96,7 +97,7 @@ impl RunResult {
         let (Some(first), Some(last)) = (self.ensemble.first(), self.ensemble.last()) else {
             return String::new();
         };
-        let range = |f: &dyn Fn(&crate::run::ensemble::MemberSummary) -> f64| {
+        let range = |f: &dyn Fn(&MemberSummary) -> f64| {
             let values = self.ensemble.iter().map(f);
             values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
                 (lo.min(v), hi.max(v))

@@ -4,7 +4,7 @@
 //! ([`CutSchedule`]).
 
 use crate::run::knot_track::KnotTrack;
-use crate::run::runner::{probes_at_start, ContactStats, Probe, SolverTotals};
+use crate::run::totals::{ContactStats, SolverTotals};
 use crate::scene::Scene;
 use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes, StepReport};
@@ -12,6 +12,17 @@ use splinerod_adaptivity::Continuity;
 use splinerod_core::Real;
 use splinerod_energies::EnergySummary;
 use std::time::Instant;
+
+/// The trajectory of one material point.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize, PartialEq)]
+pub struct Probe {
+    /// Material coordinate, fraction of the rest length.
+    pub s: Real,
+    /// Times, s (the initial state first).
+    pub t: Vec<Real>,
+    /// Positions at those times, m.
+    pub positions: Vec<[Real; 3]>,
+}
 
 /// What a member accumulated besides its final state.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -124,6 +135,23 @@ impl Tally {
             self.history.push([t, n as Real]);
         }
     }
+}
+
+/// Each probed material point of `scene` where `system` starts, at time 0.
+fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Error> {
+    scene
+        .output
+        .probes
+        .iter()
+        .map(|&s| {
+            let p = system.rod.point(scene.material_coordinate(s))?;
+            Ok(Probe {
+                s,
+                t: vec![0.0],
+                positions: vec![p.into()],
+            })
+        })
+        .collect()
 }
 
 /// The scene's cuts in time order, applied once each.

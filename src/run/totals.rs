@@ -1,9 +1,10 @@
-//! [`SolverTotals`]: the solver counters a run sums over its stages and members (JSON
-//! `solver`).
+//! What a run folds over its stages and members: [`SolverTotals`], the solver counters
+//! (JSON `solver`), and [`ContactStats`], the contact seen (JSON `contact`).
 
 use crate::{StepReport, UnbatchedCounts};
 use serde::Serialize;
 use splinerod_core::Real;
+use splinerod_energies::ContactSummary;
 use std::ops::AddAssign;
 
 /// Solver counters summed over the run.
@@ -98,5 +99,43 @@ impl AddAssign for SolverTotals {
         self.knots_inserted += o.knots_inserted;
         self.knots_removed += o.knots_removed;
         self.redone_steps += o.redone_steps;
+    }
+}
+
+/// Contact over the run (scenes with `[contact]`).
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
+pub struct ContactStats {
+    /// Smallest clearance ratio seen at the start or at the end of any step: centre-line
+    /// distance between touching parts over `2r`, or from an obstacle's surface over
+    /// `r` (below 1: overlap); `null` if nothing came within the penalty's reach.
+    pub min_clearance_ratio: Option<Real>,
+    /// Most contacts at once.
+    pub max_pairs: usize,
+    /// Most material samples touching an obstacle at once (0 without obstacles).
+    pub max_obstacle_contacts: usize,
+    /// The contact stiffness at the end, N/m: the penalty's `k` or the barrier's `κ`,
+    /// as the updates left it (`splinerod_energies::contact::stiffness`).
+    pub stiffness_used: Option<Real>,
+    /// The gap tolerance, m (`null` for a fixed penalty: `stiffness` without
+    /// `tolerance`).
+    pub tolerance: Option<Real>,
+    /// The smallest gap at the end over the contact's sample pairs and surface points,
+    /// m (negative: overlap; `null` if nothing is within reach): at rest, how far from
+    /// touching the contacts sit.
+    pub end_gap: Option<Real>,
+}
+
+impl ContactStats {
+    /// Folds in one contact summary.
+    pub(crate) fn add(&mut self, summary: &ContactSummary) {
+        self.max_pairs = self.max_pairs.max(summary.pairs);
+        self.max_obstacle_contacts = self.max_obstacle_contacts.max(summary.obstacle_contacts);
+        self.stiffness_used = Some(summary.stiffness);
+        self.tolerance = summary.tolerance;
+        self.end_gap = summary.min_gap;
+        if let Some(ratio) = summary.min_clearance_ratio {
+            self.min_clearance_ratio =
+                Some(self.min_clearance_ratio.map_or(ratio, |r| r.min(ratio)));
+        }
     }
 }

@@ -1,0 +1,62 @@
+//! The forces and torques of a scene's `[[pins]]` entries at the end of a run, read from
+//! the integrator's pin forces: one per entry, an exact clamp's tangent pin folded into
+//! its clamp.
+
+use crate::scene::Scene;
+use crate::{Error, Simulation};
+use splinerod_core::Real;
+
+/// One force per `[[pins]]` entry: an exact clamp's tangent pin (after them in the
+/// system) adds its force to its clamp's (the pair's net force; their moment is the
+/// clamp's bending moment).
+pub(crate) fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
+    let mut forces = sim.integrator.pin_forces();
+    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+        let extra = forces[i];
+        forces[j] += extra;
+    }
+    forces.truncate(scene.pins.len());
+    forces.into_iter().map(Into::into).collect()
+}
+
+/// `(i, j)` for every exact clamp: its tangent pin `i` in the system (below `count`) and
+/// its `[[pins]]` entry `j`.
+fn clamp_tangents<'a>(
+    scene: &'a Scene,
+    sim: &'a Simulation,
+    count: usize,
+) -> impl Iterator<Item = (usize, usize)> + 'a {
+    let pins = &sim.system.pins;
+    (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
+        let pin = &pins[i];
+        let clamp = scene.pins.iter().position(|p| {
+            p.clamp
+                && matches!(scene.entry_coordinate(p.rod.as_deref(), p.at), Ok(s) if s == pin.at)
+        });
+        clamp.filter(|_| pin.tangent).map(|j| (i, j))
+    })
+}
+
+/// One torque per `[[pins]]` entry (N·m, about the pinned point): the twisting moment at
+/// the end clamps ([`crate::run::twist::pin_torques`]) plus, at an exact clamp, the
+/// bending moment of its pin pair, \\((q_1 - q_0) \times F_1\\) with \\(F_1\\) the force on
+/// the control point next to the end. Empty when no pin carries a torque.
+pub(crate) fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 3]>, Error> {
+    let mut torques = crate::run::twist::pin_torques(scene, &sim.system)?;
+    let forces = sim.integrator.pin_forces();
+    let rod = &sim.system.rod;
+    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+        let pin = &sim.system.pins[i];
+        let next = pin.row(rod)?.first;
+        let points = rod.segment_points(rod.segment_at(pin.at));
+        let end = if next == points.start + 1 {
+            points.start
+        } else {
+            points.end - 1
+        };
+        let moment = (rod.positions[next] - rod.positions[end]).cross(&forces[i]);
+        torques.resize(scene.pins.len(), [0.0; 3]);
+        torques[j] = (nalgebra::Vector3::from(torques[j]) + moment).into();
+    }
+    Ok(torques)
+}
