@@ -88,7 +88,8 @@ impl Direct {
         };
         self.energies[k]
             .iter_mut()
-            .for_each(|e| e.on_knot_change(rod, &map));
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.on_knot_change(rod, &map));
     }
 }
 
@@ -187,7 +188,8 @@ fn energies_of_joined_rods_are_the_rods_energies() {
         };
         whole
             .iter_mut()
-            .for_each(|w| w.on_knot_change(&joined, &map));
+            .filter_map(|w| w.lifecycle_mut())
+            .for_each(|l| l.on_knot_change(&joined, &map));
         let shifted = (start + local) - start;
         direct.replay(k, shifted, insert);
         for (k, r) in direct.rods.iter_mut().enumerate() {

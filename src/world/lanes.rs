@@ -41,9 +41,9 @@
 
 use crate::world::unbatched::Unbatched;
 use crate::Simulation;
-use splinerod_core::{Derivatives, Lanes, Real, LANES};
+use splinerod_core::{Derivatives, Lanes, Real, Rod, LANES};
 use splinerod_energies::lanes::add_lanes;
-use splinerod_energies::LaneTerm;
+use splinerod_energies::{Energy, LaneTerm};
 use splinerod_integrators::lane_euler::{LaneEuler, LanePotential};
 use splinerod_integrators::{NewtonParams, System};
 use std::cell::RefCell;
@@ -111,14 +111,18 @@ pub(crate) fn batching(
         return Err(Unbatched::Adaptive);
     }
     let system = &sim.system;
-    if !system.drivers.is_empty() || system.energies.iter().any(|e| e.time_dependent()) {
+    let driven = system.energies.iter().any(|e| {
+        let lifecycle = e.capabilities().lifecycle;
+        lifecycle.is_some_and(|l| l.time_dependent())
+    });
+    if !system.drivers.is_empty() || driven {
         return Err(Unbatched::Driven);
     }
     if sim.system.begin_step(dt).is_err() {
         return Err(Unbatched::Setup);
     }
     let rod = &sim.system.rod;
-    if let Some(e) = sim.system.acting().find(|e| e.lane_term(rod).is_none()) {
+    if let Some(e) = sim.system.acting().find(|e| lane_term(*e, rod).is_none()) {
         return Err(if e.name() == "stretch" {
             Unbatched::StretchingForm
         } else {
@@ -152,7 +156,7 @@ fn same_forms(a: &Simulation, b: &Simulation) -> bool {
     let (ra, rb) = (&a.system.rod, &b.system.rod);
     a.system.acting().count() == b.system.acting().count()
         && a.system.acting().zip(b.system.acting()).all(|(x, y)| {
-            match (x.lane_term(ra), y.lane_term(rb)) {
+            match (lane_term(x, ra), lane_term(y, rb)) {
                 (Some(x), Some(y)) => x.same_form(&y),
                 _ => false,
             }
@@ -277,7 +281,7 @@ fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
     for slot in terms.terms.iter_mut().take(count) {
         let mut lane = [None; LANES];
         for ((term, energies), m) in lane.iter_mut().zip(acting.iter_mut()).zip(members) {
-            *term = energies.next()?.lane_term(&m.system.rod);
+            *term = lane_term(energies.next()?, &m.system.rod);
         }
         let mut all = [lane[0]?; LANES];
         for (to, from) in all.iter_mut().zip(lane) {
@@ -289,4 +293,9 @@ fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
         *slot = Some(all);
     }
     Some(terms)
+}
+
+/// `energy`'s lane term on `rod`, if it has a [`splinerod_energies::LaneForm`] and the form applies now.
+fn lane_term<'a>(energy: &'a dyn Energy, rod: &'a Rod) -> Option<LaneTerm<'a>> {
+    energy.capabilities().lanes?.lane_term(rod)
 }

@@ -304,7 +304,10 @@ impl Simulation {
                 Err(_) => Real::NAN,
             })
             .sum();
-        let driven = self.system.energies.iter().any(|e| e.time_dependent());
+        let driven = self.system.energies.iter().any(|e| {
+            let lifecycle = e.capabilities().lifecycle;
+            lifecycle.is_some_and(|l| l.time_dependent())
+        });
         if self.system.grabs.is_empty() && !driven {
             return loads;
         }
@@ -316,10 +319,16 @@ impl Simulation {
             }
         };
         swap(&mut self.system.grabs, &mut self.substep.targets);
-        self.system.energies.iter_mut().for_each(|e| e.drive(start));
+        let energies = self.system.energies.iter_mut();
+        energies
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.drive(start));
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
-        self.system.energies.iter_mut().for_each(|e| e.drive(end));
+        let energies = self.system.energies.iter_mut();
+        energies
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.drive(end));
         now - then + loads
     }
 

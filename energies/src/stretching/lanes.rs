@@ -272,7 +272,7 @@ fn add_function_blocks<const FUSED: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Energy;
+    use crate::{LaneForm, Lifecycle};
     use nalgebra::Vector3;
     use splinerod_core::{BSplineSpace, Material};
 

@@ -49,6 +49,7 @@ pub(crate) use lanes::add_moment_lanes;
 pub use lanes::MomentTerm;
 pub use multipliers::Multipliers;
 
+use crate::capabilities::{Capabilities, HessianRemainder, LaneForm, Lifecycle, Tension};
 use crate::Energy;
 use guard::GuardSums;
 use nalgebra::{Matrix3, Vector3};
@@ -393,10 +394,6 @@ fn tangent(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> Vector3<Real> {
 }
 
 impl Energy for Stretching {
-    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
-        self.moment_term(rod)
-    }
-
     fn name(&self) -> &str {
         "stretch"
     }
@@ -451,37 +448,30 @@ impl Energy for Stretching {
         self.add_guard_terms(rod, GuardSums { hessian, gradient });
     }
 
-    fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
-        self.consistent()
-    }
-
-    fn add_hessian_remainder(
-        &self,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        self.mixed_remainder(rod, v, scale, out);
-    }
-
-    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
-        if self.formulation != StretchFormulation::Pointwise {
-            self.mixed_tension(rod, s, out);
-            return true;
+    fn bandwidth(&self, rod: &Rod) -> usize {
+        let d = rod.basis().degree();
+        match self.formulation {
+            StretchFormulation::Pointwise => d,
+            _ => 2 * d - 1,
         }
-        let mut b = BasisValues::default();
-        for (&s, t) in s.iter().zip(out) {
-            if rod.basis().evaluate(s, &mut b).is_ok() {
-                let c1 = b.combine(&b.d1, &rod.positions);
-                let g0 = self.rest_metric_at(s);
-                let eps = 0.5 * (c1.norm_squared() - g0) / g0;
-                *t += self.stiffness * eps * c1.norm() / g0.sqrt();
-            }
-        }
-        true
     }
 
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            remainder: Some(self),
+            tension: Some(self),
+            lanes: Some(self),
+            ..Capabilities::default()
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Stretching {
     /// The axial stiffness `EA` (an inextensible rod's penalty has its own continuation:
     /// not scaled).
     fn set_stiffness_scale(&mut self, scale: Real) -> bool {
@@ -494,14 +484,6 @@ impl Energy for Stretching {
             self.unscaled = None;
         }
         true
-    }
-
-    fn bandwidth(&self, rod: &Rod) -> usize {
-        let d = rod.basis().degree();
-        match self.formulation {
-            StretchFormulation::Pointwise => d,
-            _ => 2 * d - 1,
-        }
     }
 
     fn on_knot_change(&mut self, rod: &Rod, _map: &KnotMap) {
@@ -545,5 +527,46 @@ impl Energy for Stretching {
         self.multipliers
             .as_mut()
             .map_or(0.0, |m| m.update(&tensions, stiffen))
+    }
+}
+
+impl HessianRemainder for Stretching {
+    fn has_remainder(&self, _rod: &Rod) -> bool {
+        self.consistent()
+    }
+
+    fn add_remainder(
+        &self,
+        rod: &Rod,
+        v: &[Vector3<Real>],
+        scale: Real,
+        out: &mut [Vector3<Real>],
+    ) {
+        self.mixed_remainder(rod, v, scale, out);
+    }
+}
+
+impl Tension for Stretching {
+    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
+        if self.formulation != StretchFormulation::Pointwise {
+            self.mixed_tension(rod, s, out);
+            return true;
+        }
+        let mut b = BasisValues::default();
+        for (&s, t) in s.iter().zip(out) {
+            if rod.basis().evaluate(s, &mut b).is_ok() {
+                let c1 = b.combine(&b.d1, &rod.positions);
+                let g0 = self.rest_metric_at(s);
+                let eps = 0.5 * (c1.norm_squared() - g0) / g0;
+                *t += self.stiffness * eps * c1.norm() / g0.sqrt();
+            }
+        }
+        true
+    }
+}
+
+impl LaneForm for Stretching {
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        self.moment_term(rod)
     }
 }

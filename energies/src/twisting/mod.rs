@@ -42,6 +42,7 @@ mod closed;
 pub mod holonomy;
 mod window;
 
+use crate::capabilities::{Capabilities, Lifecycle, Summary};
 use crate::{Energy, EnergySummary, TwistSummary};
 use holonomy::{
     curvature_binormal, curvature_binormal_jacobians, is_cut, signed_angle, transport, wrap,
@@ -394,6 +395,20 @@ impl Energy for Twisting {
         samples.bandwidth(rod)
     }
 
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            summary: Some(self),
+            ..Capabilities::default()
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Twisting {
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = map;
         self.released |= is_cut(rod);
@@ -413,19 +428,6 @@ impl Energy for Twisting {
 
     fn time_dependent(&self) -> bool {
         self.schedules.iter().any(Option::is_some)
-    }
-
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        Ok(EnergySummary {
-            twist: Some(TwistSummary {
-                twist: self.twist(rod),
-                turn: self.turn,
-                moment: self.moment(rod),
-                axes: [self.start.axis.into(), self.end.axis.into()],
-                start_director: self.start.director.into(),
-            }),
-            ..EnergySummary::default()
-        })
     }
 
     fn save_state(&self, out: &mut SavedState) {
@@ -469,5 +471,20 @@ impl Energy for Twisting {
             self.branch = branch;
         }
         Ok(())
+    }
+}
+
+impl Summary for Twisting {
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            twist: Some(TwistSummary {
+                twist: self.twist(rod),
+                turn: self.turn,
+                moment: self.moment(rod),
+                axes: [self.start.axis.into(), self.end.axis.into()],
+                start_director: self.start.director.into(),
+            }),
+            ..EnergySummary::default()
+        })
     }
 }
