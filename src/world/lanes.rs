@@ -3,7 +3,7 @@
 //! ([`splinerod_integrators::lane_euler`]), structure of arrays, one lane per member.
 //!
 //! The batched step only *solves*: each member's result is handed to its own integrator
-//! ([`Integrator::preload`]), and the member then takes its step as always — sub-steps,
+//! ([`splinerod_integrators::Batched::preload`]), and the member then takes its step as always — sub-steps,
 //! energy hooks, the error estimate, adaptivity, the report — with the integrator taking
 //! the preloaded result instead of solving when the step is the one it was computed
 //! for. So a batched member goes through exactly the stages of a member stepped alone,
@@ -19,7 +19,7 @@
 //! decided in one place, [`batching`], from the ensemble's setting, the step's `dt` and
 //! the member alone, which returns the reason ([`Unbatched`]) when it cannot: batching
 //! is on ([`crate::Ensemble::batched`]), `dt` is finite and positive, its integrator has a batched form
-//! ([`Integrator::lane_params`], implicit Euler), its step is taken whole (no shorter
+//! ([`splinerod_integrators::Batched::lane_params`], implicit Euler), its step is taken whole (no shorter
 //! sub-step pending), it does not adapt its knots (whose decisions a round-off
 //! difference could flip), it has no driven pins and no time-dependent energy, and
 //! every energy acting on it has a lane form ([`splinerod_energies::Energy::lane_term`]:
@@ -101,7 +101,8 @@ pub(crate) fn batching(
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Unbatched::Solver);
     }
-    let params = sim.integrator.lane_params().ok_or(Unbatched::Scheme)?;
+    let scheme = sim.integrator.batched().ok_or(Unbatched::Scheme)?;
+    let params = scheme.lane_params();
     if !sim.substep.memory().next.is_none_or(|h| h >= dt) {
         return Err(Unbatched::SubStep);
     }
@@ -258,7 +259,9 @@ fn solve_lanes(
             let sim = &mut group[i];
             let rod = &sim.system.rod;
             let start = (rod.positions.as_slice(), rod.velocities.as_slice());
-            sim.integrator.preload(start, &outcome, dt);
+            if let Some(scheme) = sim.integrator.batched() {
+                scheme.preload(start, &outcome, dt);
+            }
         }
     });
 }

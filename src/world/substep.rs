@@ -48,6 +48,7 @@
 use crate::{Error, Simulation};
 use nalgebra::Vector3;
 use splinerod_core::Real;
+use splinerod_integrators::Role;
 use splinerod_integrators::{IntegratorError, StepStats};
 use std::time::Instant;
 
@@ -143,7 +144,7 @@ impl Simulation {
     /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
     /// may hold an intermediate state: the caller restores it.
     pub(crate) fn integrate(&mut self, dt: Real) -> Result<(StepStats, SubstepCounts), Error> {
-        if self.integrator.solves_equilibrium() {
+        if self.integrator.role() == Role::Equilibrium {
             // One solve for the loads at the end of the step: no time error to control.
             let (stats, _) = self.try_substep(self.time + dt, dt)?;
             let counts = SubstepCounts {
@@ -264,7 +265,7 @@ impl Simulation {
             0.0
         };
         let setup = Instant::now();
-        if !self.integrator.solves_equilibrium() {
+        if self.integrator.role() == Role::Dynamic {
             self.system.begin_step(h)?;
         }
         self.clock.setup += setup.elapsed().as_secs_f64();
