@@ -2,7 +2,7 @@
 //! every run mode (static, the three integrators, an ensemble; with and without an
 //! initial rest shape, contact and bending), must reach every energy: after each
 //! change and each stage, every energy whose data follow the basis equals a rebuild of
-//! it on the current basis ([`Energy::for_finer_rod`] on the rod itself).
+//! it on the current basis ([`Lifecycle::for_finer_rod`] on the rod itself).
 
 use nalgebra::Vector3;
 use proptest::prelude::*;

@@ -9,7 +9,8 @@ use crate::capabilities::{HessianRemainder, Interaction, LaneForm, Summary, Tens
 use crate::ContactSummary;
 
 /// What an energy reports about the rod's current state, for run statistics (see
-/// [`crate::capabilities::Summary`]); every part is optional and summaries of several energies merge.
+/// [`crate::capabilities::Summary`]); every part is optional and summaries of several
+/// energies merge.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct EnergySummary {
     /// Contacts the energy sees (self-contact, a floor, obstacles).

@@ -2,7 +2,7 @@
 //! batched ensemble step, #17; storage in [`splinerod_core::lanes`]).
 //!
 //! An energy joins the batched step by describing itself as a [`LaneTerm`]
-//! ([`crate::Energy::lane_term`]): a form whose evaluation is written once for all lanes.
+//! ([`crate::LaneForm::lane_term`]): a form whose evaluation is written once for all lanes.
 //! The forms are
 //!
 //! - **gravity** on the lumped masses, \\(E = -\sum_i m_i\, g \cdot q_i\\) (gradient

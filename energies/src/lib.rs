@@ -1,7 +1,8 @@
 //! # splinerod-energies
 //!
 //! Potential energies of a rod, as functions of its control points, through one small
-//! trait, [`Energy`], and small [`capabilities`] beside it. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12),
+//! trait, [`Energy`], and small [`capabilities`] beside it. Provided: continuous
+//! Green–Lagrange [`Stretching`] (paper eq. 11–12),
 //! [`Bending`] with the exact nonlinear curvature, a penalty [`Clamp`] on the tangent
 //! direction at a material point, uniform [`Gravity`], the [`PointSpring`] of a grab and the [`Contact`] penalty (self-contact,
 //! cut pieces, floor). [`OnSegment`] puts any energy on one rod of a joined rod

@@ -229,22 +229,23 @@ pub trait Batched: Send + Sync {
 /// A minimal implementation, the explicit (symplectic) Euler step without pins:
 /// ```
 /// use splinerod_core::Real;
-/// use splinerod_integrators::{Integrator, IntegratorError, StepStats, System};
+/// use splinerod_integrators::{Integrator, IntegratorError as Error, StepStats, System};
 /// use nalgebra::Vector3;
 ///
 /// struct Explicit;
 /// impl Integrator for Explicit {
 ///     fn name(&self) -> &str { "explicit" }
-///     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
-///         let mut force = vec![Vector3::zeros(); system.rod().len()];
-///         system.add_potential_gradient(&mut force);
+///     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, Error> {
+///         let mut gradient = vec![Vector3::zeros(); system.rod().len()];
+///         system.add_potential_gradient(&mut gradient);
 ///         let rod = system.rod_mut();
 ///         let masses = rod.lumped_masses().to_vec();
-///         for ((v, f), m) in rod.velocities.iter_mut().zip(&force).zip(&masses) {
-///             *v -= f * (dt / m);
+///         for ((v, g), m) in rod.velocities.iter_mut().zip(&gradient).zip(&masses) {
+///             *v -= g * (dt / m);
 ///         }
-///         let velocities = rod.velocities.clone();
-///         rod.positions.iter_mut().zip(&velocities).for_each(|(q, v)| *q += v * dt);
+///         for (q, v) in rod.positions.iter_mut().zip(&rod.velocities) {
+///             *q += v * dt;
+///         }
 ///         Ok(StepStats { converged: true, ..StepStats::default() })
 ///     }
 /// }

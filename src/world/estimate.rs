@@ -4,8 +4,8 @@
 //!
 //! \\[ \hat r = \nabla \hat E + \hat M (\hat a + \alpha \hat v), \\]
 //!
-//! with every acting energy (through [`Energy::for_finer_rod`] where an energy's data
-//! follow the rod's basis or belong to the step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
+//! with every acting energy (through [`splinerod_energies::Lifecycle::for_finer_rod`]
+//! where an energy's data follow the rod's basis or belong to the step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
 //! exactly onto the finer basis, and zero on coefficients a pin holds.
 //!
 //! The stiffness is the potential's definite Hessian plus \(2\hat M / t^2\), `t` the

@@ -3,8 +3,8 @@
 //! ([`splinerod_integrators::lane_euler`]), structure of arrays, one lane per member.
 //!
 //! The batched step only *solves*: each member's result is handed to its own integrator
-//! ([`splinerod_integrators::Batched::preload`]), and the member then takes its step as always — sub-steps,
-//! energy hooks, the error estimate, adaptivity, the report — with the integrator taking
+//! ([`splinerod_integrators::Batched::preload`]), and the member then takes its step
+//! as always — sub-steps, energy hooks, the error estimate, adaptivity, the report — with the integrator taking
 //! the preloaded result instead of solving when the step is the one it was computed
 //! for. So a batched member goes through exactly the stages of a member stepped alone,
 //! and its result equals that member's up to round-off (tested: relative 1e-12 on the
@@ -19,10 +19,10 @@
 //! decided in one place, [`batching`], from the ensemble's setting, the step's `dt` and
 //! the member alone, which returns the reason ([`Unbatched`]) when it cannot: batching
 //! is on ([`crate::Ensemble::batched`]), `dt` is finite and positive, its integrator has a batched form
-//! ([`splinerod_integrators::Batched::lane_params`], implicit Euler), its step is taken whole (no shorter
-//! sub-step pending), it does not adapt its knots (whose decisions a round-off
+//! ([`splinerod_integrators::Batched::lane_params`], implicit Euler), its step is
+//! taken whole (no shorter sub-step pending), it does not adapt its knots (whose decisions a round-off
 //! difference could flip), it has no driven pins and no time-dependent energy, and
-//! every energy acting on it has a lane form ([`splinerod_energies::Energy::lane_term`]:
+//! every energy acting on it has a lane form ([`splinerod_energies::LaneForm::lane_term`]:
 //! gravity, the lumped mixed stretching and bending); anything else (contact, grabs,
 //! loads, clamps, twist) is stepped alone. A batched solve that meets what it does not
 //! replicate (see the solver's docs) hands the lane's member back to step alone, with
@@ -86,7 +86,7 @@ impl LanePotential for Terms<'_> {
 /// member steps alone, [`Unbatched::Off`]); a `dt` that is not finite and positive is
 /// no step the lanes take ([`Unbatched::Solver`]); past those only the member's own
 /// state decides (see the module docs). The step's own `begin_step` is idempotent
-/// (`Energy::lane_term`'s contract), so calling it here changes nothing. The solve can
+/// (`LaneForm::lane_term`'s contract), so calling it here changes nothing. The solve can
 /// still hand a member back ([`Unbatched::Terms`], [`Unbatched::Solver`] and the lane
 /// failures, from [`solve_lanes`]), and the member's step record one it did not take
 /// ([`Unbatched::of_step`]).
@@ -298,7 +298,8 @@ fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
     Some(terms)
 }
 
-/// `energy`'s lane term on `rod`, if it has a [`splinerod_energies::LaneForm`] and the form applies now.
+/// `energy`'s lane term on `rod`, if it has a [`splinerod_energies::LaneForm`] and the
+/// form applies now.
 fn lane_term<'a>(energy: &'a dyn Energy, rod: &'a Rod) -> Option<LaneTerm<'a>> {
     energy.capabilities().lanes?.lane_term(rod)
 }

@@ -2,7 +2,7 @@
 //! adaptive resolution.
 //!
 //! One step (paper §4.1): move the grabs' targets to the end of the step, start every
-//! energy's step ([`splinerod_energies::Energy::begin_step`]), integrate (forces,
+//! energy's step ([`splinerod_energies::Lifecycle::begin_step`]), integrate (forces,
 //! Jacobians, one sparse solve per Newton iteration), then adapt — insert and remove
 //! knots through the exact maps, with the grabs and every energy's interaction points
 //! as interactions — and report what happened, stage by stage ([`StepReport`]). Every

@@ -126,8 +126,8 @@ impl Lifecycle for Contact {
     }
 
     /// In a static solve (`stiffen`), raises an adapting stiffness where the tolerance
-    /// is not met (see [`crate::contact::stiffness`]); between time steps nothing (their updates come
-    /// at [`Energy::begin_step`]).
+    /// is not met (see [`crate::contact::stiffness`]); between time steps nothing (their
+    /// updates come at [`Lifecycle::begin_step`]).
     fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
         if stiffen {
             self.stiffen_for_statics(rod)

@@ -74,7 +74,7 @@ pub enum StretchFormulation {
     /// Mixed, with the tension coefficients from the consistent Gram matrix instead of
     /// the lumped one (`stretching/tensions.rs`): locking-free and of order `d + 1` on
     /// stretchy rods too. Its Hessian has a remainder that is not banded
-    /// ([`Energy::add_hessian_remainder`]), which Newton's method handles by
+    /// ([`crate::HessianRemainder::add_remainder`]), which Newton's method handles by
     /// preconditioned conjugate gradients.
     MixedConsistent,
 }
@@ -117,7 +117,7 @@ pub struct Stretching {
     /// scenes with contact turn it on.
     pub guard: bool,
     rest: Option<RestMetric>,
-    /// `stiffness` before [`Energy::set_stiffness_scale`] scaled it (`None`: unscaled).
+    /// `stiffness` before [`crate::Lifecycle::set_stiffness_scale`] scaled it (`None`: unscaled).
     unscaled: Option<Real>,
     /// The mixed form's integrals for the rod's current basis ([`table`]).
     table: table::TensionTable,
@@ -178,7 +178,7 @@ impl Stretching {
 
     /// An inextensible rod: the mixed form's constraints (every tension function's mean
     /// strain zero) held by an augmented Lagrangian ([`Multipliers`]); call
-    /// [`Energy::update_multipliers`] after each solve or step.
+    /// [`crate::Lifecycle::update_multipliers`] after each solve or step.
     pub fn inextensible(rod: &Rod) -> Self {
         let mut s = Self {
             stiffness: 1.0,

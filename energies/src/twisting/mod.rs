@@ -34,7 +34,7 @@
 //! measures; the curve itself does not move.
 //!
 //! **Cut rods.** A cut leaves pieces with a free end, which carry no twist: once the
-//! energy hears (through [`Energy::on_knot_change`]) that a knot reached multiplicity
+//! energy hears (through [`crate::Lifecycle::on_knot_change`]) that a knot reached multiplicity
 //! `d + 1`, the twist is released and the energy is zero from then on. (Evaluated on a
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
@@ -120,7 +120,7 @@ pub struct Twisting {
     /// Whether the rod was cut (the twist is released).
     released: bool,
     /// Turn schedules of the start and end clamps about their axes (rad against s);
-    /// [`Energy::drive`] sets `turn` to their difference.
+    /// [`crate::Lifecycle::drive`] sets `turn` to their difference.
     schedules: [Option<Keyframes<Real>>; 2],
     /// The tangent samples (rows cached per basis, tangents per call).
     samples: Mutex<Samples>,
@@ -197,7 +197,7 @@ impl Twisting {
     }
 
     /// These clamps turning about their axes on schedules (rad; `None`: held still):
-    /// [`Energy::drive`] sets [`turn`](Self::turn) to `end(t) − start(t)`.
+    /// [`crate::Lifecycle::drive`] sets [`turn`](Self::turn) to `end(t) − start(t)`.
     pub fn with_turns(
         mut self,
         start: Option<Keyframes<Real>>,
