@@ -1,10 +1,11 @@
 //! A decorator keeps every capability of the energy it wraps: [`OnSegment`] around an
 //! energy that has all of them has all of them too, and each answers through it on the
 //! segment (its rod, its control points, its material coordinates).
+mod common;
+
+use common::part;
 use nalgebra::Vector3;
-use splinerod_core::{
-    BSplineSpace, CoreError, KnotMap, Material, Real, Rod, SavedState, StateReader,
-};
+use splinerod_core::{CoreError, KnotMap, Real, Rod, SavedState, StateReader};
 use splinerod_energies::{
     Capabilities, Energy, EnergySummary, HessianRemainder, Interaction, LaneForm, LaneTerm,
     Lifecycle, OnSegment, Summary, Tension, TwistSummary,
@@ -156,19 +157,6 @@ impl Summary for Everything {
             ..EnergySummary::default()
         })
     }
-}
-
-fn part(n: usize, length: Real, lift: Real) -> Rod {
-    let material = Material {
-        rest_length: length,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, n, length).expect("basis");
-    let (a, b) = (
-        Vector3::new(0.0, lift, 0.0),
-        Vector3::new(length, lift, 0.0),
-    );
-    Rod::straight(material, Box::new(basis), a, b).expect("rod")
 }
 
 #[test]
