@@ -6,6 +6,7 @@ use crate::common;
 use common::sample_gap;
 use nalgebra::Vector3;
 use splinerod::adaptivity::{AdaptParams, Adapter, InteractionCriterion};
+use splinerod::energies::{Capabilities, Interaction, Lifecycle};
 use splinerod::prelude::*;
 use splinerod::{run, Scene};
 use splinerod_core::CoreError;
@@ -155,12 +156,28 @@ impl Energy for Tether {
     fn bandwidth(&self, _rod: &Rod) -> usize {
         0
     }
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            interaction: Some(self),
+            ..Capabilities::default()
+        }
+    }
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Tether {
     fn begin_step(&mut self, rod: &Rod, dt: f64) -> Result<(), CoreError> {
         assert!(dt > 0.0);
         self.start.clone_from(&rod.positions);
         self.steps.fetch_add(1, Ordering::Relaxed);
         Ok(())
     }
+}
+
+impl Interaction for Tether {
     fn interaction_points(&self, _rod: &Rod, out: &mut Vec<f64>) -> Result<(), CoreError> {
         out.push(self.at);
         Ok(())

@@ -9,7 +9,7 @@
 //! never below `min_control_points`; never a cut knot; and
 //! hysteresis: a knot inserted is not removed during the next `hysteresis_steps` adapt
 //! steps, so nothing oscillates. Every applied map is reported through a callback, so
-//! energies with per-coefficient caches can follow (`Energy::on_knot_change`) without
+//! energies with per-coefficient caches can follow (`Lifecycle::on_knot_change`) without
 //! this crate knowing about them.
 
 use crate::{AdaptError, Continuity, ErrorEstimate, Refinement, RefinementCriterion};

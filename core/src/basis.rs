@@ -79,7 +79,13 @@ impl BasisValues {
 
 /// A space of piecewise-polynomial basis functions on a knot vector.
 ///
-/// Required: everything except [`domain`](BasisSpace::domain). Implementations must be
+/// Required: [`degree`](BasisSpace::degree), [`count`](BasisSpace::count),
+/// [`knots`](BasisSpace::knots), [`evaluate`](BasisSpace::evaluate),
+/// [`insert_knot`](BasisSpace::insert_knot), [`removal`](BasisSpace::removal),
+/// [`remove_knot`](BasisSpace::remove_knot) and [`clone_box`](BasisSpace::clone_box);
+/// the rest have defaults (a periodic or refinable space overrides
+/// [`periodic_count`](BasisSpace::periodic_count) and
+/// [`refined`](BasisSpace::refined)). Implementations must be
 /// exact under [`insert_knot`](BasisSpace::insert_knot): the returned [`KnotMap`]
 /// expresses every old basis function in the new ones (paper eq. 3), so any curve keeps
 /// its shape when its coefficients go through the map.

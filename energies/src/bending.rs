@@ -64,6 +64,7 @@ mod span_batch;
 pub(crate) use lanes::add_bending_lanes;
 pub use lanes::BendingTerm;
 
+use crate::capabilities::{Capabilities, LaneForm, Lifecycle};
 use crate::Energy;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use span_batch::{Entries, PointTerms, SpanBatch, Sums};
@@ -271,26 +272,6 @@ fn clamp_psd(m: &Matrix6<Real>) -> Matrix6<Real> {
 }
 
 impl Energy for Bending {
-    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
-        if rod.quadrature().has_second_derivatives() {
-            return Ok(());
-        }
-        Err(CoreError::InvalidParameter {
-            name: "bending on a rod without second derivatives",
-            value: 0.0,
-            reason: "bending reads the basis' second derivatives, which \
-                     Rod::without_second_derivatives left out of the quadrature table",
-        })
-    }
-
-    fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
-        self.supports(rod)
-    }
-
-    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
-        self.bending_term(rod)
-    }
-
     fn name(&self) -> &str {
         "bending"
     }
@@ -334,5 +315,41 @@ impl Energy for Bending {
             hessian: Some(hessian),
         };
         self.accumulate(rod, kind, sums);
+    }
+
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            lanes: Some(self),
+            ..Capabilities::default()
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Bending {
+    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
+        if rod.quadrature().has_second_derivatives() {
+            return Ok(());
+        }
+        Err(CoreError::InvalidParameter {
+            name: "bending on a rod without second derivatives",
+            value: 0.0,
+            reason: "bending reads the basis' second derivatives, which \
+                     Rod::without_second_derivatives left out of the quadrature table",
+        })
+    }
+
+    fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
+        self.supports(rod)
+    }
+}
+
+impl LaneForm for Bending {
+    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
+        self.bending_term(rod)
     }
 }

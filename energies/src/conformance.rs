@@ -76,7 +76,8 @@ pub fn check_energy(energy: &dyn Energy, expect: Expectations) -> Result<Report,
     let mut report = Report::default();
     let setup = |e: CoreError| format!("{}: test setup failed: {e}", energy.name());
     for (label, rod) in test_rods().map_err(setup)? {
-        if energy.supports(&rod).is_err() {
+        let lifecycle = energy.capabilities().lifecycle;
+        if lifecycle.is_some_and(|l| l.supports(&rod).is_err()) {
             continue;
         }
         let fail =
@@ -293,16 +294,16 @@ fn gradient_error(energy: &dyn Energy, rod: &Rod) -> Real {
 }
 
 /// The dense Hessian: the banded part and, column by column, the remainder
-/// ([`Energy::add_hessian_remainder`]).
+/// ([`crate::HessianRemainder`]).
 fn hessian_of(energy: &dyn Energy, rod: &Rod, kind: HessianKind) -> nalgebra::DMatrix<Real> {
     let n = rod.len();
     let mut h = BlockBanded::zeros(n, energy.bandwidth(rod));
     energy.add_hessian(rod, kind, &mut h);
     let mut dense = h.to_dense();
-    if energy.has_hessian_remainder(rod) {
-        add_operator_columns(n, &mut dense, |v, out| {
-            energy.add_hessian_remainder(rod, v, 1.0, out)
-        });
+    if let Some(r) = energy.capabilities().remainder {
+        if r.has_remainder(rod) {
+            add_operator_columns(n, &mut dense, |v, out| r.add_remainder(rod, v, 1.0, out));
+        }
     }
     dense
 }

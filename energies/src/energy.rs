@@ -1,14 +1,16 @@
 //! The [`Energy`] trait and its finite-difference Hessian default.
 
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{
-    BlockBanded, CoreError, HessianKind, KnotMap, Real, Rod, SavedState, StateReader,
-};
+use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
 
+use crate::capabilities::{Capabilities, Lifecycle};
+#[cfg(doc)]
+use crate::capabilities::{HessianRemainder, Interaction, LaneForm, Summary, Tension};
 use crate::ContactSummary;
 
 /// What an energy reports about the rod's current state, for run statistics (see
-/// [`Energy::summary`]); every part is optional and summaries of several energies merge.
+/// [`crate::capabilities::Summary`]); every part is optional and summaries of several
+/// energies merge.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct EnergySummary {
     /// Contacts the energy sees (self-contact, a floor, obstacles).
@@ -55,16 +57,16 @@ impl EnergySummary {
 /// [`add_hessian`](Energy::add_hessian) defaults to central finite differences of the
 /// gradient (O(n), slow but correct for energies coupling control points at most
 /// `degree` apart, i.e. any integral of the curve and its derivatives); real energies
-/// override it. [`on_knot_change`](Energy::on_knot_change) lets an energy with cached
-/// per-coefficient data update it locally; the default does nothing.
+/// override it.
 ///
-/// **Lifecycle.** Besides the knot changes, an energy with state of its own hears of
-/// each integrator step ([`begin_step`](Energy::begin_step)), can name the material
-/// points where it acts locally ([`interaction_points`](Energy::interaction_points),
-/// read by the adaptivity), forbid states a line search must not enter
-/// ([`admissible`](Energy::admissible)) and report statistics
-/// ([`summary`](Energy::summary)). All default to doing nothing; contact uses all of
-/// them, and any other energy with per-step state plugs in the same way.
+/// **Capabilities.** Everything else an energy may do is a small trait of its own
+/// ([`crate::capabilities`]), reached through [`capabilities`](Energy::capabilities)
+/// and, for the one with state to change, [`lifecycle_mut`](Energy::lifecycle_mut): its
+/// [`Lifecycle`] (per-step hooks, knot changes, driving, checkpoints), [`Interaction`]
+/// points and barrier, a [`HessianRemainder`], a [`Tension`], a [`LaneForm`] for the
+/// batched step, a [`Summary`]. An energy has none of them unless it says so;
+/// decorators such as [`crate::OnSegment`] pass all of them on
+/// ([`crate::decorate`]).
 ///
 /// A minimal implementation, a spring holding the rod's first control point at the origin:
 /// ```
@@ -113,58 +115,6 @@ pub trait Energy: Send + Sync {
         self.add_hessian(rod, kind, hessian);
     }
 
-    /// Whether the Hessian has a remainder that [`add_hessian`](Energy::add_hessian)
-    /// leaves out (see [`add_hessian_remainder`](Energy::add_hessian_remainder)). The
-    /// default: none.
-    fn has_hessian_remainder(&self, rod: &Rod) -> bool {
-        let _ = rod;
-        false
-    }
-
-    /// Adds `scale · R v` to `out`, where the Hessian is `H + R` with `H` what
-    /// [`add_hessian`](Energy::add_hessian) adds (exact kind) and `R` a part that is not
-    /// banded — a mixed form's consistent Gram matrix couples every control point with
-    /// every other. `R` must be symmetric positive semi-definite and the same for either
-    /// [`HessianKind`]: Newton's method factorises the banded `H` and corrects its step
-    /// by conjugate gradients preconditioned with it, which converge fast when `H` is
-    /// close to `H + R` (for the mixed stretching, within a factor the degree bounds).
-    /// O(n) and allocation-free. The default: no remainder.
-    fn add_hessian_remainder(
-        &self,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        let _ = (rod, v, scale, out);
-    }
-
-    /// Adds the axial tension (force along the centreline, N) this energy carries at the
-    /// material coordinates `s` into `out` (same length) and returns true; energies
-    /// without a tension (the default) return false.
-    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
-        let _ = (rod, s, out);
-        false
-    }
-
-    /// For energies holding constraints by multipliers (the inextensible rod): one
-    /// method-of-multipliers update at the current state, `stiffen`ing the penalty if the
-    /// violation fell too slowly (for repeated solves of one equilibrium, not for time
-    /// steps); returns the violation before it (dimensionless). The default has no
-    /// constraints: 0.
-    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
-        let _ = (rod, stiffen);
-        0.0
-    }
-
-    /// Scales the energy's stiffness to `scale` times its own (`1` restores it exactly),
-    /// for a static solver's continuation from a soft rod to the real one; returns
-    /// whether the energy has such a stiffness (the default: no, and nothing changes).
-    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
-        let _ = scale;
-        false
-    }
-
     /// Block bandwidth of the Hessian: the largest distance between two control points
     /// the energy couples (the degree `d` by default: integrals of the curve and its
     /// derivatives couple control points that share a span).
@@ -172,112 +122,16 @@ pub trait Energy: Send + Sync {
         rod.basis().degree()
     }
 
-    /// Called after the rod's knots changed through `map`; update cached data locally.
-    fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
-        let _ = (rod, map);
+    /// The capabilities this energy has besides the core ([`crate::capabilities`]):
+    /// by default none.
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities::default()
     }
 
-    /// This energy for `fine`, a copy of its rod on a finer basis (the same curve), for
-    /// error estimators that evaluate energies there. An energy whose data follow the
-    /// rod's coefficients or quadrature points (see
-    /// [`on_knot_change`](Energy::on_knot_change)) must return a copy that follows
-    /// `fine`; the default `None` says the energy holds no such data and is evaluated on
-    /// `fine` as it is.
-    fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
-        let _ = fine;
+    /// Its [`Lifecycle`], mutably, if it has one (then also in
+    /// [`capabilities`](Energy::capabilities)); by default none.
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
         None
-    }
-
-    /// Whether the energy can act on `rod`: an error naming what it cannot handle (a
-    /// closed rod, for an energy defined by the rod's ends). Systems check it when an
-    /// energy is added, and the conformance harness skips the rods it refuses. Default:
-    /// every rod.
-    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
-        let _ = rod;
-        Ok(())
-    }
-
-    /// Called before each integrator step (sub-step) of `dt` seconds, at the state it
-    /// starts from: freeze per-step data here (contact freezes its friction anchors).
-    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
-        let _ = (rod, dt);
-        Ok(())
-    }
-
-    /// Appends what this energy keeps between steps that the rod does not determine
-    /// (multipliers, a transported frame, a neighbour list whose rounding results depend
-    /// on), for a checkpoint ([`splinerod_core::state`]). Default: nothing.
-    fn save_state(&self, out: &mut SavedState) {
-        let _ = out;
-    }
-
-    /// Reads back what [`save_state`](Energy::save_state) wrote, into a copy built like
-    /// this one and brought to the same knots; `rod` is the restored rod.
-    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        let _ = (rod, input);
-        Ok(())
-    }
-
-    /// Called in the drivers stage of every step (sub-step) with the time `t` the step
-    /// ends at (a static solve: its end time): time-dependent energies — a turning
-    /// clamp, a moving obstacle — set their state for `t` here. Default: nothing.
-    fn drive(&mut self, t: Real) {
-        let _ = t;
-    }
-
-    /// Whether [`drive`](Energy::drive) changes this energy (energy-conserving
-    /// integrators then count the work it does). Default false.
-    fn time_dependent(&self) -> bool {
-        false
-    }
-
-    /// Appends the material coordinates (m) where this energy acts locally now (both
-    /// sides of every contact), for refinement criteria; the default appends none.
-    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
-        let _ = (rod, out);
-        Ok(())
-    }
-
-    /// Whether the rod's state is one Newton's line search may move to (a penalty is a
-    /// finite barrier; see `System::admissible`). Default: always.
-    fn admissible(&self, rod: &Rod) -> bool {
-        let _ = rod;
-        true
-    }
-
-    /// Appends the force (N) the rod exerts on each rigid obstacle this energy holds
-    /// (the contact energy); the default holds none.
-    fn add_obstacle_forces(
-        &self,
-        rod: &Rod,
-        out: &mut Vec<Vector3<Real>>,
-    ) -> Result<(), CoreError> {
-        let _ = (rod, out);
-        Ok(())
-    }
-
-    /// The segment of a joined rod this energy acts on alone ([`crate::OnSegment`]);
-    /// `None` (the default) for an energy of the whole rod.
-    fn segment(&self) -> Option<usize> {
-        None
-    }
-
-    /// This energy on `rod` as a term the batched ensemble step evaluates for several
-    /// rods at once ([`crate::lanes`]), if it has such a form now; `None` (the default)
-    /// steps a rod with this energy on its own, with the same result. The term must
-    /// equal [`energy`](Energy::energy) and the exact
-    /// [`add_gradient_and_hessian`](Energy::add_gradient_and_hessian) up to round-off,
-    /// and [`begin_step`](Energy::begin_step) must be idempotent for an energy that has
-    /// one (the batched step calls it before the member's own step does).
-    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
-        let _ = rod;
-        None
-    }
-
-    /// Statistics of the current state for reports; the default reports nothing.
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        let _ = rod;
-        Ok(EnergySummary::default())
     }
 }
 

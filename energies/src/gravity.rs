@@ -1,6 +1,7 @@
 //! Uniform gravity: \\(E = -\int_0^L \mu\, g \cdot C(s)\, ds = -\sum_i m_i\, g \cdot q_i\\)
 //! with the lumped masses \\(m_i = \int \mu b_i\\) (paper §3.2, \\(B_i = m g \int b_i\\)).
 
+use crate::capabilities::{Capabilities, LaneForm};
 use crate::Energy;
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, CoreError, HessianKind, Real, Rod};
@@ -46,6 +47,15 @@ impl Energy for Gravity {
 
     fn add_hessian(&self, _rod: &Rod, _kind: HessianKind, _hessian: &mut BlockBanded) {}
 
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lanes: Some(self),
+            ..Capabilities::default()
+        }
+    }
+}
+
+impl LaneForm for Gravity {
     fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
         Some(crate::LaneTerm::Gravity {
             g: self.g,

@@ -2,7 +2,7 @@
 //! batched ensemble step, #17; storage in [`splinerod_core::lanes`]).
 //!
 //! An energy joins the batched step by describing itself as a [`LaneTerm`]
-//! ([`crate::Energy::lane_term`]): a form whose evaluation is written once for all lanes.
+//! ([`crate::LaneForm::lane_term`]): a form whose evaluation is written once for all lanes.
 //! The forms are
 //!
 //! - **gravity** on the lumped masses, \\(E = -\sum_i m_i\, g \cdot q_i\\) (gradient
@@ -154,7 +154,7 @@ fn add_gravity(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Bending, Energy, Gravity, Stretching};
+    use crate::{Bending, Energy, Gravity, LaneForm, Lifecycle, Stretching};
     use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, LaneBand, Material, Rod};
 
     /// Four rods of one basis, bent and stretched differently (`wiggle` scales the
@@ -187,12 +187,18 @@ mod tests {
         wiggly_rods(degree, 1.0)
     }
 
+    /// The lane term of a boxed energy (which must have one).
+    fn lane_term<'a>(energy: &'a dyn Energy, rod: &'a Rod) -> LaneTerm<'a> {
+        let form = energy.capabilities().lanes.expect("a lane form");
+        form.lane_term(rod).expect("lane form")
+    }
+
     /// Lane evaluation of one energy per rod against each energy's own.
     fn check(rods: &[Rod], energies: &[Box<dyn Energy>]) {
         let n = rods[0].len();
         let bw = energies[0].bandwidth(&rods[0]);
         let terms: [LaneTerm<'_>; LANES] =
-            std::array::from_fn(|l| energies[l].lane_term(&rods[l]).expect("lane form"));
+            std::array::from_fn(|l| lane_term(energies[l].as_ref(), &rods[l]));
         assert!(LaneTerm::compatible(&terms, n, bw));
         let q: Vec<Lanes> = (0..3 * n)
             .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
@@ -291,7 +297,7 @@ mod tests {
             })
             .collect();
         let terms: [LaneTerm<'_>; LANES] =
-            std::array::from_fn(|l| energies[l].lane_term(&rods[l]).expect("lane form"));
+            std::array::from_fn(|l| lane_term(&energies[l], &rods[l]));
         let n = rods[0].len();
         let q: Vec<Lanes> = (0..3 * n)
             .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
@@ -329,7 +335,7 @@ mod tests {
                 })
                 .collect();
             let terms: [LaneTerm<'_>; LANES] =
-                std::array::from_fn(|l| energies[l].lane_term(rods[l]).expect("lane form"));
+                std::array::from_fn(|l| lane_term(&energies[l], rods[l]));
             let n = rods[0].len();
             let q: Vec<Lanes> = (0..3 * n)
                 .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))

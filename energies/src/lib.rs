@@ -1,7 +1,8 @@
 //! # splinerod-energies
 //!
 //! Potential energies of a rod, as functions of its control points, through one small
-//! trait, [`Energy`]. Provided: continuous Green–Lagrange [`Stretching`] (paper eq. 11–12),
+//! trait, [`Energy`], and small [`capabilities`] beside it. Provided: continuous
+//! Green–Lagrange [`Stretching`] (paper eq. 11–12),
 //! [`Bending`] with the exact nonlinear curvature, a penalty [`Clamp`] on the tangent
 //! direction at a material point, uniform [`Gravity`], the [`PointSpring`] of a grab and the [`Contact`] penalty (self-contact,
 //! cut pieces, floor). [`OnSegment`] puts any energy on one rod of a joined rod
@@ -33,9 +34,11 @@
 #![warn(missing_docs)]
 
 mod bending;
+pub mod capabilities;
 mod clamp;
 pub mod conformance;
 pub mod contact;
+pub mod decorate;
 mod energy;
 mod gravity;
 pub mod lanes;
@@ -48,8 +51,12 @@ mod test_rods;
 pub mod twisting;
 
 pub use bending::{Bending, BendingTerm, STRETCH_FLOOR};
+pub use capabilities::{
+    Capabilities, HessianRemainder, Interaction, LaneForm, Lifecycle, Summary, Tension,
+};
 pub use clamp::Clamp;
 pub use contact::{Contact, ContactLaw, ContactParams, ContactSummary, Obstacle};
+pub use decorate::{Decorator, Placement};
 pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary};
 pub use gravity::Gravity;
 pub use lanes::LaneTerm;

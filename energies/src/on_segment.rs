@@ -22,16 +22,22 @@
 //! **Other rods.** Evaluated on a rod that is not the joined rod it follows (an error
 //! estimator's refined copy, whose topology epoch differs), it builds a second copy of
 //! the segment from that rod and evaluates there; an inner energy whose data follow the
-//! basis is instead given its own copy through [`Energy::for_finer_rod`].
+//! basis is instead given its own copy through [`Lifecycle::for_finer_rod`].
+//!
+//! **Capabilities.** `OnSegment` forwards none by hand: it is a [`Decorator`] (how its
+//! copy stands for the joined rod: [`Decorator::view`], [`Placement`], the knot replay,
+//! the finer copy), and every capability of the inner energy passes through the
+//! generic implementations of [`crate::decorate`] — a capability added later passes
+//! through without a change here.
 //!
 //! **Cost.** A copy of the segment's state per evaluation (O(n_k)) and, for the
 //! Hessian, one pass over the inner energy's blocks: small next to the quadrature.
 
-use crate::{Energy, EnergySummary};
+use crate::capabilities::{Capabilities, Lifecycle};
+use crate::decorate::{lifecycle_through, Decorator, Placement};
+use crate::Energy;
 use nalgebra::Vector3;
-use splinerod_core::{
-    BlockBanded, CoreError, HessianKind, KnotMap, KnotOperation, Real, Rod, SavedState, StateReader,
-};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, KnotMap, KnotOperation, Real, Rod};
 use std::sync::Mutex;
 
 /// An energy of one segment of a joined rod (module docs).
@@ -53,7 +59,6 @@ struct Local {
     rod: Rod,
     epoch: u64,
     hessian: BlockBanded,
-    scratch: Vec<Real>,
 }
 
 impl Local {
@@ -62,7 +67,6 @@ impl Local {
             rod: joined.segment_rod(segment)?,
             epoch: joined.topology_epoch(),
             hessian: BlockBanded::default(),
-            scratch: Vec::new(),
         })
     }
 }
@@ -109,11 +113,6 @@ impl OnSegment {
             _ => gradient,
         };
         part.fill(Vector3::repeat(Real::NAN));
-    }
-
-    /// Start of the segment's parameter interval.
-    fn start(&self, joined: &Rod) -> Real {
-        joined.segments().get(self.segment).map_or(0.0, |g| g.start)
     }
 }
 
@@ -200,69 +199,62 @@ impl Energy for OnSegment {
         }
     }
 
-    /// Asked once per Newton iteration: answered on the segment's copy as it is (a
-    /// property of the energy, not of the state), without copying the state in.
-    fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
-        let copies = self.copies.lock().unwrap_or_else(|e| e.into_inner());
-        self.inner.has_hessian_remainder(&copies.main.rod)
-    }
-
-    fn add_hessian_remainder(
-        &self,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        let first = rod.segment_points(self.segment).start;
-        self.with(rod, (), |local| {
-            let n = local.rod.len();
-            let (v, out) = (&v[first..first + n], &mut out[first..first + n]);
-            self.inner.add_hessian_remainder(&local.rod, v, scale, out);
-        });
-    }
-
-    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
-        let start = self.start(rod);
-        let end = start
-            + rod
-                .segments()
-                .get(self.segment)
-                .map_or(0.0, |g| g.rest_length());
-        self.with(rod, false, |local| {
-            let mut any = false;
-            for (si, oi) in s.iter().zip(out.iter_mut()) {
-                if (start..=end).contains(si) {
-                    local.scratch.clear();
-                    local.scratch.push(0.0);
-                    any |= self
-                        .inner
-                        .add_tension(&local.rod, &[si - start], &mut local.scratch);
-                    *oi += local.scratch[0];
-                }
-            }
-            any
-        })
-    }
-
-    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
-        let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
-        match copy_for(copies, rod, self.segment) {
-            Some(local) => self.inner.update_multipliers(&local.rod, stiffen),
-            None => 0.0,
-        }
-    }
-
-    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
-        self.inner.set_stiffness_scale(scale)
-    }
-
     fn bandwidth(&self, rod: &Rod) -> usize {
         let d = rod.basis().degree();
         self.with(rod, d, |local| self.inner.bandwidth(&local.rod))
     }
 
-    fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
+    /// The inner energy's capabilities, answered on the segment (generic:
+    /// [`crate::decorate`]).
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            segment: Some(self.segment),
+            ..self.inner.capabilities().through(self)
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        lifecycle_through(self)
+    }
+}
+
+/// How the segment's copy stands for the joined rod; every capability follows from it.
+impl Decorator for OnSegment {
+    fn inner(&self) -> &dyn Energy {
+        self.inner.as_ref()
+    }
+
+    fn inner_mut(&mut self) -> &mut dyn Energy {
+        self.inner.as_mut()
+    }
+
+    fn placement(&self, rod: &Rod) -> Placement {
+        let segment = rod.segments().get(self.segment);
+        let start = segment.map_or(0.0, |g| g.start);
+        Placement {
+            first: rod.segment_points(self.segment).start,
+            start,
+            end: start + segment.map_or(0.0, |g| g.rest_length()),
+        }
+    }
+
+    fn view<R>(&self, rod: &Rod, f: impl FnOnce(&dyn Energy, &Rod) -> R) -> Option<R> {
+        self.with(rod, None, |local| Some(f(self.inner.as_ref(), &local.rod)))
+    }
+
+    fn view_mut<R>(&mut self, rod: &Rod, f: impl FnOnce(&mut dyn Energy, &Rod) -> R) -> Option<R> {
+        let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
+        let local = copy_for(copies, rod, self.segment)?;
+        Some(f(self.inner.as_mut(), &local.rod))
+    }
+
+    /// Replays a change inside the segment on the copy (module docs).
+    fn follow_knot_change(
+        &mut self,
+        rod: &Rod,
+        map: &KnotMap,
+        f: impl FnOnce(&mut dyn Energy, &Rod, &KnotMap),
+    ) {
         let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
         let local = &mut copies.main;
         local.epoch = rod.topology_epoch();
@@ -282,7 +274,7 @@ impl Energy for OnSegment {
             }
         };
         match replayed {
-            Ok(local_map) => self.inner.on_knot_change(&local.rod, &local_map),
+            Ok(local_map) => f(self.inner.as_mut(), &local.rod, &local_map),
             // The joined rod made this change, so the same change on the copy cannot
             // fail; should it, rebuild the copy (the inner energy keeps its caches).
             Err(_) => {
@@ -293,9 +285,13 @@ impl Energy for OnSegment {
         }
     }
 
-    fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
+    fn on_finer(
+        &self,
+        fine: &Rod,
+        f: impl FnOnce(&dyn Energy, &Rod) -> Option<Box<dyn Energy>>,
+    ) -> Option<Box<dyn Energy>> {
         let main = Local::of(fine, self.segment).ok()?;
-        let inner = self.inner.for_finer_rod(&main.rod)?;
+        let inner = f(self.inner.as_ref(), &main.rod)?;
         Some(Box::new(OnSegment {
             segment: self.segment,
             inner,
@@ -303,58 +299,11 @@ impl Energy for OnSegment {
         }))
     }
 
-    fn save_state(&self, out: &mut SavedState) {
-        self.inner.save_state(out);
-    }
-
-    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
-        match copy_for(copies, rod, self.segment) {
-            Some(local) => self.inner.load_state(&local.rod, input),
-            None => Err(CoreError::StateMismatch("a segment the rod does not have")),
+    fn unplaced(&self) -> CoreError {
+        CoreError::InvalidParameter {
+            name: "segment",
+            value: self.segment as Real,
+            reason: "the rod has no such segment, or it changed unheard",
         }
-    }
-
-    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
-        let copies = self.copies.get_mut().unwrap_or_else(|e| e.into_inner());
-        match copy_for(copies, rod, self.segment) {
-            Some(local) => self.inner.begin_step(&local.rod, dt),
-            None => Err(CoreError::InvalidParameter {
-                name: "segment",
-                value: self.segment as Real,
-                reason: "the rod has no such segment, or it changed unheard",
-            }),
-        }
-    }
-
-    fn drive(&mut self, t: Real) {
-        self.inner.drive(t);
-    }
-
-    fn time_dependent(&self) -> bool {
-        self.inner.time_dependent()
-    }
-
-    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
-        let (from, start) = (out.len(), self.start(rod));
-        self.with(rod, Ok(()), |local| {
-            self.inner.interaction_points(&local.rod, out)
-        })?;
-        out[from..].iter_mut().for_each(|s| *s += start);
-        Ok(())
-    }
-
-    fn admissible(&self, rod: &Rod) -> bool {
-        self.with(rod, false, |local| self.inner.admissible(&local.rod))
-    }
-
-    fn segment(&self) -> Option<usize> {
-        Some(self.segment)
-    }
-
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        self.with(rod, Ok(EnergySummary::default()), |local| {
-            self.inner.summary(&local.rod)
-        })
     }
 }

@@ -6,6 +6,7 @@ use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
 use splinerod_energies::conformance::{
     check_energy, Expectations, RigidInvariance, EXACT_TOLERANCE,
 };
+use splinerod_energies::Lifecycle;
 use splinerod_energies::{
     finite_difference_hessian, Bending, Clamp, Energy, Gravity, PointSpring, StretchFormulation,
     Stretching,

@@ -6,6 +6,7 @@
 //! (a checkpoint on the step of a cut), loads on the cut rod and detects alike.
 use nalgebra::{DMatrix, Vector3};
 use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod, SavedState};
+use splinerod_energies::Lifecycle;
 use splinerod_energies::{Contact, ContactParams, Energy};
 
 const R: Real = 0.003;

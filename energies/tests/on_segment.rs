@@ -1,27 +1,12 @@
 //! `OnSegment`: energies of the rods of a joined rod equal the same energies on the rods
 //! alone — energy, gradient and Hessian placed at the rod's control points — before and
 //! after knot changes inside one rod.
-use nalgebra::Vector3;
-use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod};
-use splinerod_energies::{Bending, Energy, Frame, OnSegment, Stretching, Twisting};
+mod common;
 
-fn part(n: usize, length: Real, lift: Real) -> Rod {
-    let material = Material {
-        rest_length: length,
-        linear_density: 0.1,
-    };
-    let basis = BSplineSpace::clamped_uniform(3, n, length).expect("basis");
-    let (a, b) = (
-        Vector3::new(0.0, lift, 0.0),
-        Vector3::new(0.9 * length, lift, 0.2),
-    );
-    let mut rod = Rod::straight(material, Box::new(basis), a, b).expect("rod");
-    for (i, q) in rod.positions.iter_mut().enumerate() {
-        let x = i as Real;
-        *q += Vector3::new(0.0, 0.04 * (1.9 * x).sin(), 0.03 * (0.7 * x).cos());
-    }
-    rod
-}
+use common::part;
+use nalgebra::Vector3;
+use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
+use splinerod_energies::{Bending, Energy, Frame, OnSegment, Stretching, Twisting};
 
 /// One energy per part (different kinds and stiffnesses), built for a rod of its own.
 fn part_energies(k: usize, rod: &Rod) -> Vec<Box<dyn Energy>> {
@@ -88,7 +73,8 @@ impl Direct {
         };
         self.energies[k]
             .iter_mut()
-            .for_each(|e| e.on_knot_change(rod, &map));
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.on_knot_change(rod, &map));
     }
 }
 
@@ -187,7 +173,8 @@ fn energies_of_joined_rods_are_the_rods_energies() {
         };
         whole
             .iter_mut()
-            .for_each(|w| w.on_knot_change(&joined, &map));
+            .filter_map(|w| w.lifecycle_mut())
+            .for_each(|l| l.on_knot_change(&joined, &map));
         let shifted = (start + local) - start;
         direct.replay(k, shifted, insert);
         for (k, r) in direct.rods.iter_mut().enumerate() {

@@ -7,6 +7,7 @@ use splinerod_core::{
     add_operator_columns, BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod,
 };
 use splinerod_energies::{finite_difference_hessian, Energy, StretchFormulation, Stretching};
+use splinerod_energies::{HessianRemainder, Lifecycle};
 
 /// A curved rod whose parametrisation is far from arclength.
 fn wavy() -> Rod {
@@ -88,9 +89,7 @@ fn derivatives_match_finite_differences() {
     let mut exact = BlockBanded::zeros(n, e.bandwidth(&rod));
     e.add_hessian(&rod, HessianKind::Exact, &mut exact);
     let mut exact = exact.to_dense();
-    add_operator_columns(n, &mut exact, |v, out| {
-        e.add_hessian_remainder(&rod, v, 1.0, out)
-    });
+    add_operator_columns(n, &mut exact, |v, out| e.add_remainder(&rod, v, 1.0, out));
     let mut fd = nalgebra::DMatrix::zeros(3 * n, 3 * n);
     for c in 0..3 * n {
         let (mut p, mut m) = (rod.clone(), rod.clone());

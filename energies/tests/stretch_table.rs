@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, HessianKind, Real, RefinementOperator, Rod};
 use splinerod_energies::conformance::test_rods;
 use splinerod_energies::{Energy, StretchFormulation, Stretching};
+use splinerod_energies::{HessianRemainder, Lifecycle};
 
 /// Energy, gradient and Hessian (both kinds) of `e`, through the fused call.
 fn evaluate(
@@ -162,7 +163,7 @@ fn table_equals_sweep_for_the_consistent_form() {
                 .collect();
             let product = |e: &Stretching, rod: &Rod| {
                 let mut out = vec![Vector3::zeros(); rod.len()];
-                e.add_hessian_remainder(rod, &v, 1.0, &mut out);
+                e.add_remainder(rod, &v, 1.0, &mut out);
                 out
             };
             let (swept, table) = (product(&tabled, &untabled(&rod)), product(&tabled, &rod));

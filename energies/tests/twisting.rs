@@ -3,6 +3,7 @@
 use nalgebra::Vector3;
 use splinerod_core::{BSplineSpace, Material, Rod};
 use splinerod_energies::conformance::{check_energy, Expectations, RigidInvariance};
+use splinerod_energies::Lifecycle;
 use splinerod_energies::{Energy, Frame, Twisting};
 
 fn straight(n: usize, degree: usize) -> Rod {

@@ -14,7 +14,7 @@
 use crate::incremental::{Increment, Stepper};
 use crate::lane_euler::LaneOutcome;
 use crate::newton::NewtonParams;
-use crate::{Integrator, IntegratorError, StepStats, System};
+use crate::{Batched, Integrator, IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::Real;
 
@@ -27,7 +27,7 @@ pub struct ImplicitEuler {
     preloaded: Preloaded,
 }
 
-/// A step the batched form took ([`Integrator::preload`]), waiting for the step it is.
+/// A step the batched form took ([`Batched::preload`]), waiting for the step it is.
 ///
 /// The step is recognised by its `dt` and a copy of its start state, compared with the
 /// rod's state bit for bit ([`same_bits`]): exact by construction, where a hash of the
@@ -105,8 +105,14 @@ impl Integrator for ImplicitEuler {
         self.stepper.pin_forces()
     }
 
-    fn lane_params(&self) -> Option<NewtonParams> {
-        Some(self.params)
+    fn batched(&mut self) -> Option<&mut dyn Batched> {
+        Some(self)
+    }
+}
+
+impl Batched for ImplicitEuler {
+    fn lane_params(&self) -> NewtonParams {
+        self.params
     }
 
     fn preload(

@@ -190,10 +190,66 @@ impl std::ops::AddAssign for StepStats {
     }
 }
 
-/// Advances a [`System`] in time.
+/// What an [`Integrator`]'s step is ([`Integrator::role`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Role {
+    /// A step in time of the given duration, with inertia (the time integrators).
+    #[default]
+    Dynamic,
+    /// An equilibrium solve under the loads at the step's end (the [`StaticSolver`]).
+    Equilibrium,
+}
+
+/// A scheme whose step the batched ensemble step can take for it ([`lane_euler`]): an
+/// ensemble steps the members whose schemes have this form several at once and hands
+/// each its result. Reached through [`Integrator::batched`].
+pub trait Batched: Send + Sync {
+    /// The Newton settings with which this scheme's step is the batched implicit Euler
+    /// step.
+    fn lane_params(&self) -> NewtonParams;
+
+    /// Hands the scheme the step of `dt` the batched form took from the state `start`
+    /// (positions, velocities): the next [`Integrator::step`] of the same `dt` from that
+    /// state (recognised exactly: the same bits) takes it instead of solving; any other
+    /// step ignores it.
+    fn preload(
+        &mut self,
+        start: (&[Vector3<Real>], &[Vector3<Real>]),
+        outcome: &lane_euler::LaneOutcome<'_>,
+        dt: Real,
+    );
+}
+
+/// Advances a [`System`] in time, or solves for its equilibrium ([`Role`]).
 ///
 /// Required: [`name`](Integrator::name) and [`step`](Integrator::step). On error the
-/// system is left exactly as before the step.
+/// system is left exactly as before the step. A scheme the batched ensemble step can
+/// take says so through [`batched`](Integrator::batched).
+///
+/// A minimal implementation, the explicit (symplectic) Euler step without pins:
+/// ```
+/// use splinerod_core::Real;
+/// use splinerod_integrators::{Integrator, IntegratorError as Error, StepStats, System};
+/// use nalgebra::Vector3;
+///
+/// struct Explicit;
+/// impl Integrator for Explicit {
+///     fn name(&self) -> &str { "explicit" }
+///     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, Error> {
+///         let mut gradient = vec![Vector3::zeros(); system.rod().len()];
+///         system.add_potential_gradient(&mut gradient);
+///         let rod = system.rod_mut();
+///         let masses = rod.lumped_masses().to_vec();
+///         for ((v, g), m) in rod.velocities.iter_mut().zip(&gradient).zip(&masses) {
+///             *v -= g * (dt / m);
+///         }
+///         for (q, v) in rod.positions.iter_mut().zip(&rod.velocities) {
+///             *q += v * dt;
+///         }
+///         Ok(StepStats { converged: true, ..StepStats::default() })
+///     }
+/// }
+/// ```
 pub trait Integrator: Send + Sync {
     /// Short name, as used in scene files (`"implicit-euler"`).
     fn name(&self) -> &str;
@@ -206,36 +262,21 @@ pub trait Integrator: Send + Sync {
     fn conserves_energy(&self) -> bool {
         false
     }
-    /// Whether this "integrator" solves for equilibrium instead of advancing in time
-    /// (the [`StaticSolver`]): a step then has no duration of its own — no inertia, no
-    /// sub-steps, no per-step energy hooks — and yields the equilibrium under the loads
-    /// at its end. Default false.
-    fn solves_equilibrium(&self) -> bool {
-        false
+    /// What a step is: a step in time (the default) or an equilibrium solve (the
+    /// [`StaticSolver`]: no duration of its own — no inertia, no sub-steps, no per-step
+    /// energy hooks — and the equilibrium under the loads at its end).
+    fn role(&self) -> Role {
+        Role::Dynamic
     }
     /// Forces the pins exerted on the rod during the last step, N, one per pin (empty if
     /// the integrator does not compute them).
     fn pin_forces(&self) -> Vec<Vector3<Real>> {
         Vec::new()
     }
-    /// The Newton settings with which this scheme's step is the batched implicit Euler
-    /// step ([`lane_euler`]): an ensemble steps the members whose schemes have them
-    /// several at once and hands each its result ([`preload`](Integrator::preload)).
-    /// Default `None`: the scheme has no batched form.
-    fn lane_params(&self) -> Option<NewtonParams> {
+    /// The scheme's [`Batched`] form, if the batched ensemble step can take its steps
+    /// ([`lane_euler`]). Default `None`: the scheme has no batched form.
+    fn batched(&mut self) -> Option<&mut dyn Batched> {
         None
-    }
-    /// Hands the scheme the step of `dt` the batched form took from the state
-    /// `start` (positions, velocities): the next [`step`](Integrator::step) of the same
-    /// `dt` from that state (recognised exactly: the same bits) takes it
-    /// instead of solving; any other step ignores it. Default: ignored.
-    fn preload(
-        &mut self,
-        start: (&[Vector3<Real>], &[Vector3<Real>]),
-        outcome: &lane_euler::LaneOutcome<'_>,
-        dt: Real,
-    ) {
-        let _ = (start, outcome, dt);
     }
     /// Appends what the scheme keeps between steps (a multistep scheme's history), for a
     /// checkpoint ([`splinerod_core::state`]). Default: nothing.

@@ -36,7 +36,7 @@
 use crate::incremental::{Increment, Stepper};
 use crate::linear::LinearSolverKind;
 use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
-use crate::{Integrator, IntegratorError, StepStats, System};
+use crate::{Integrator, IntegratorError, Role, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, HessianKind, Pin, Real, Rod};
 
@@ -108,7 +108,7 @@ pub const CONSTRAINT_TOLERANCE: Real = 1e-12;
 pub const MAX_MULTIPLIER_UPDATES: usize = 40;
 
 /// Finds equilibria of a [`System`] (velocities are set to zero). As an
-/// [`Integrator`] ([`Integrator::solves_equilibrium`]) each step is
+/// [`Integrator`] ([`Integrator::role`] [`Role::Equilibrium`]) each step is
 /// [`StaticSolver::solve_constrained`] under the loads at the step's end: a
 /// quasi-static sequence.
 #[derive(Debug, Default)]
@@ -584,8 +584,8 @@ impl Integrator for StaticSolver {
         self.solve_constrained(system)
     }
 
-    fn solves_equilibrium(&self) -> bool {
-        true
+    fn role(&self) -> Role {
+        Role::Equilibrium
     }
 
     fn pin_forces(&self) -> Vec<Vector3<Real>> {

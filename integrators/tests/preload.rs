@@ -1,11 +1,11 @@
-//! A preloaded step ([`Integrator::preload`], the batched ensemble's hand-over) is taken
+//! A preloaded step ([`Batched::preload`], the batched ensemble's hand-over) is taken
 //! by the next step of the same `dt` from the same state, once, and ignored otherwise.
 
 use nalgebra::Vector3;
 use splinerod_core::Real;
 use splinerod_integrators::conformance::TestString;
 use splinerod_integrators::lane_euler::LaneOutcome;
-use splinerod_integrators::{ImplicitEuler, Integrator, NewtonParams, StepStats};
+use splinerod_integrators::{Batched, ImplicitEuler, Integrator, NewtonParams, StepStats};
 
 fn string() -> TestString {
     let g = Vector3::new(0.0, -9.81, 0.0);
@@ -47,7 +47,9 @@ fn a_preloaded_step_is_taken_once_and_only_from_its_start() {
     // From its start and dt: taken, with its counters and pin forces.
     let (mut system, mut scheme) = (string(), euler());
     let start = (system.rod.positions.clone(), system.rod.velocities.clone());
-    scheme.preload((&start.0, &start.1), &outcome, dt);
+    let batched = scheme.batched().expect("implicit Euler has a batched form");
+    assert_eq!(batched.lane_params(), NewtonParams::default());
+    batched.preload((&start.0, &start.1), &outcome, dt);
     let taken = scheme.step(&mut system, dt).expect("step");
     assert_eq!(taken.batched, 1);
     assert_eq!(system.rod.positions, q);

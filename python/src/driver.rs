@@ -1,6 +1,7 @@
 //! What a Python `Simulation` advances: a scene's run or a simulation built in code.
 
 use splinerod::core::Cancel;
+use splinerod::integrators::Role;
 use splinerod::{Error, Real, SceneRun};
 
 /// What advances: a scene's run, or one simulation built in code with its step.
@@ -34,9 +35,9 @@ impl Driver {
                     if cancel.check() {
                         return Err(Error::Interrupted("between steps"));
                     }
-                    match sim.integrator.solves_equilibrium() {
-                        true => sim.settle()?,
-                        false => sim.step(*dt)?,
+                    match sim.integrator.role() {
+                        Role::Equilibrium => sim.settle()?,
+                        Role::Dynamic => sim.step(*dt)?,
                     };
                     *calls += 1;
                 }
@@ -63,6 +64,6 @@ impl Driver {
 
     /// Whether the integrator solves for equilibrium (the static solver).
     pub fn is_static(&self) -> bool {
-        self.sims()[0].integrator.solves_equilibrium()
+        self.sims()[0].integrator.role() == Role::Equilibrium
     }
 }

@@ -17,6 +17,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
+use splinerod::integrators::Role;
 use splinerod::{Real, SceneRun};
 
 /// A simulation: `Scene.simulation()` or `Simulation(system, integrator, dt)`.
@@ -117,7 +118,7 @@ impl Simulation {
                 Some(i) => i.build(py)?,
                 None => Integrator::default_euler().build(py)?,
             };
-            let statics = integrator.solves_equilibrium();
+            let statics = integrator.role() == Role::Equilibrium;
             let dt = match (dt, statics) {
                 (Some(dt), _) if dt.is_finite() && dt > 0.0 => dt,
                 (None, true) => 0.0,

@@ -16,6 +16,7 @@ use crate::world::estimate::EstimateOutput;
 use crate::{Error, RodSystem, Simulation, StageTimes};
 use serde::Serialize;
 use splinerod_core::Real;
+use splinerod_integrators::Role;
 use std::collections::BTreeMap;
 
 /// How a rod was modelled (JSON `rod`).
@@ -134,7 +135,7 @@ pub(crate) fn finish(
     let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
     energy.extend(system.energy_breakdown());
     let l = rod.material().rest_length;
-    let statics = sim.integrator.solves_equilibrium();
+    let statics = sim.integrator.role() == Role::Equilibrium;
     let pin_forces = scene_pin_forces(scene, sim);
     let forms = scene.stretch_formulations_used()?;
     Ok(RunResult {

@@ -59,7 +59,11 @@ pub fn rods(
             .collect::<Result<_, _>>()?;
         let part = rod.segment_rod(k)?;
         let mut energy = BTreeMap::from([("kinetic".to_string(), part.kinetic_energy())]);
-        for e in system.energies.iter().filter(|e| e.segment() == Some(k)) {
+        for e in system
+            .energies
+            .iter()
+            .filter(|e| e.capabilities().segment == Some(k))
+        {
             *energy.entry(e.name().to_string()).or_insert(0.0) += e.energy(rod);
         }
         let mine =

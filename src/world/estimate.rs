@@ -4,8 +4,8 @@
 //!
 //! \\[ \hat r = \nabla \hat E + \hat M (\hat a + \alpha \hat v), \\]
 //!
-//! with every acting energy (through [`Energy::for_finer_rod`] where an energy's data
-//! follow the rod's basis or belong to the step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
+//! with every acting energy (through [`splinerod_energies::Lifecycle::for_finer_rod`]
+//! where an energy's data follow the rod's basis or belong to the step), the step's mean acceleration `a = (v₁ − v₀)/Δt` and the damping force mapped
 //! exactly onto the finer basis, and zero on coefficients a pin holds.
 //!
 //! The stiffness is the potential's definite Hessian plus \(2\hat M / t^2\), `t` the
@@ -261,7 +261,11 @@ impl Mechanics<'_> {
 /// Every acting energy of `system`, as evaluated on `fine`.
 fn for_each_energy_of(system: &RodSystem, fine: &Rod, mut f: impl FnMut(&dyn Energy)) {
     for e in &system.energies {
-        match e.for_finer_rod(fine) {
+        match e
+            .capabilities()
+            .lifecycle
+            .and_then(|l| l.for_finer_rod(fine))
+        {
             Some(copy) => f(copy.as_ref()),
             None => f(e.as_ref()),
         }
@@ -283,7 +287,10 @@ impl Mechanics<'_> {
     ) -> Result<bool, AdaptError> {
         hold(stiffness, held);
         let mut remainder = false;
-        self.for_each_energy(fine, |e| remainder |= e.has_hessian_remainder(fine));
+        self.for_each_energy(fine, |e| {
+            let r = e.capabilities().remainder;
+            remainder |= r.is_some_and(|r| r.has_remainder(fine));
+        });
         let s = &mut *self.scratch;
         s.flat.clear();
         s.flat.extend(rhs.iter().flat_map(|v| [v.x, v.y, v.z]));
@@ -303,7 +310,9 @@ impl Mechanics<'_> {
                 0.0,
                 &mut |v, sign, out| {
                     for_each_energy_of(energies, fine, |e| {
-                        e.add_hessian_remainder(fine, v, sign, out)
+                        if let Some(r) = e.capabilities().remainder {
+                            r.add_remainder(fine, v, sign, out);
+                        }
                     });
                     held.iter().for_each(|&k| out[k] = Vector3::zeros());
                 },

@@ -3,8 +3,8 @@
 //! ([`splinerod_integrators::lane_euler`]), structure of arrays, one lane per member.
 //!
 //! The batched step only *solves*: each member's result is handed to its own integrator
-//! ([`Integrator::preload`]), and the member then takes its step as always — sub-steps,
-//! energy hooks, the error estimate, adaptivity, the report — with the integrator taking
+//! ([`splinerod_integrators::Batched::preload`]), and the member then takes its step
+//! as always — sub-steps, energy hooks, the error estimate, adaptivity, the report — with the integrator taking
 //! the preloaded result instead of solving when the step is the one it was computed
 //! for. So a batched member goes through exactly the stages of a member stepped alone,
 //! and its result equals that member's up to round-off (tested: relative 1e-12 on the
@@ -19,10 +19,10 @@
 //! decided in one place, [`batching`], from the ensemble's setting, the step's `dt` and
 //! the member alone, which returns the reason ([`Unbatched`]) when it cannot: batching
 //! is on ([`crate::Ensemble::batched`]), `dt` is finite and positive, its integrator has a batched form
-//! ([`Integrator::lane_params`], implicit Euler), its step is taken whole (no shorter
-//! sub-step pending), it does not adapt its knots (whose decisions a round-off
+//! ([`splinerod_integrators::Batched::lane_params`], implicit Euler), its step is
+//! taken whole (no shorter sub-step pending), it does not adapt its knots (whose decisions a round-off
 //! difference could flip), it has no driven pins and no time-dependent energy, and
-//! every energy acting on it has a lane form ([`splinerod_energies::Energy::lane_term`]:
+//! every energy acting on it has a lane form ([`splinerod_energies::LaneForm::lane_term`]:
 //! gravity, the lumped mixed stretching and bending); anything else (contact, grabs,
 //! loads, clamps, twist) is stepped alone. A batched solve that meets what it does not
 //! replicate (see the solver's docs) hands the lane's member back to step alone, with
@@ -41,9 +41,9 @@
 
 use crate::world::unbatched::Unbatched;
 use crate::Simulation;
-use splinerod_core::{Derivatives, Lanes, Real, LANES};
+use splinerod_core::{Derivatives, Lanes, Real, Rod, LANES};
 use splinerod_energies::lanes::add_lanes;
-use splinerod_energies::LaneTerm;
+use splinerod_energies::{Energy, LaneTerm};
 use splinerod_integrators::lane_euler::{LaneEuler, LanePotential};
 use splinerod_integrators::{NewtonParams, System};
 use std::cell::RefCell;
@@ -86,7 +86,7 @@ impl LanePotential for Terms<'_> {
 /// member steps alone, [`Unbatched::Off`]); a `dt` that is not finite and positive is
 /// no step the lanes take ([`Unbatched::Solver`]); past those only the member's own
 /// state decides (see the module docs). The step's own `begin_step` is idempotent
-/// (`Energy::lane_term`'s contract), so calling it here changes nothing. The solve can
+/// (`LaneForm::lane_term`'s contract), so calling it here changes nothing. The solve can
 /// still hand a member back ([`Unbatched::Terms`], [`Unbatched::Solver`] and the lane
 /// failures, from [`solve_lanes`]), and the member's step record one it did not take
 /// ([`Unbatched::of_step`]).
@@ -101,7 +101,8 @@ pub(crate) fn batching(
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Unbatched::Solver);
     }
-    let params = sim.integrator.lane_params().ok_or(Unbatched::Scheme)?;
+    let scheme = sim.integrator.batched().ok_or(Unbatched::Scheme)?;
+    let params = scheme.lane_params();
     if !sim.substep.memory().next.is_none_or(|h| h >= dt) {
         return Err(Unbatched::SubStep);
     }
@@ -111,14 +112,18 @@ pub(crate) fn batching(
         return Err(Unbatched::Adaptive);
     }
     let system = &sim.system;
-    if !system.drivers.is_empty() || system.energies.iter().any(|e| e.time_dependent()) {
+    let driven = system.energies.iter().any(|e| {
+        let lifecycle = e.capabilities().lifecycle;
+        lifecycle.is_some_and(|l| l.time_dependent())
+    });
+    if !system.drivers.is_empty() || driven {
         return Err(Unbatched::Driven);
     }
     if sim.system.begin_step(dt).is_err() {
         return Err(Unbatched::Setup);
     }
     let rod = &sim.system.rod;
-    if let Some(e) = sim.system.acting().find(|e| e.lane_term(rod).is_none()) {
+    if let Some(e) = sim.system.acting().find(|e| lane_term(*e, rod).is_none()) {
         return Err(if e.name() == "stretch" {
             Unbatched::StretchingForm
         } else {
@@ -152,7 +157,7 @@ fn same_forms(a: &Simulation, b: &Simulation) -> bool {
     let (ra, rb) = (&a.system.rod, &b.system.rod);
     a.system.acting().count() == b.system.acting().count()
         && a.system.acting().zip(b.system.acting()).all(|(x, y)| {
-            match (x.lane_term(ra), y.lane_term(rb)) {
+            match (lane_term(x, ra), lane_term(y, rb)) {
                 (Some(x), Some(y)) => x.same_form(&y),
                 _ => false,
             }
@@ -254,7 +259,9 @@ fn solve_lanes(
             let sim = &mut group[i];
             let rod = &sim.system.rod;
             let start = (rod.positions.as_slice(), rod.velocities.as_slice());
-            sim.integrator.preload(start, &outcome, dt);
+            if let Some(scheme) = sim.integrator.batched() {
+                scheme.preload(start, &outcome, dt);
+            }
         }
     });
 }
@@ -277,7 +284,7 @@ fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
     for slot in terms.terms.iter_mut().take(count) {
         let mut lane = [None; LANES];
         for ((term, energies), m) in lane.iter_mut().zip(acting.iter_mut()).zip(members) {
-            *term = energies.next()?.lane_term(&m.system.rod);
+            *term = lane_term(energies.next()?, &m.system.rod);
         }
         let mut all = [lane[0]?; LANES];
         for (to, from) in all.iter_mut().zip(lane) {
@@ -289,4 +296,10 @@ fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
         *slot = Some(all);
     }
     Some(terms)
+}
+
+/// `energy`'s lane term on `rod`, if it has a [`splinerod_energies::LaneForm`] and the
+/// form applies now.
+fn lane_term<'a>(energy: &'a dyn Energy, rod: &'a Rod) -> Option<LaneTerm<'a>> {
+    energy.capabilities().lanes?.lane_term(rod)
 }

@@ -120,7 +120,9 @@ impl Simulation {
         let system = &self.system;
         let energies = system.energies.iter().map(|e| {
             let mut out = SavedState::default();
-            e.save_state(&mut out);
+            if let Some(l) = e.capabilities().lifecycle {
+                l.save_state(&mut out);
+            }
             Numbers::from(out)
         });
         let mut integrator = SavedState::default();
@@ -181,7 +183,9 @@ impl Simulation {
         for (energy, numbers) in system.energies.iter_mut().zip(&state.energies) {
             let saved = numbers.saved();
             let mut reader = saved.reader();
-            energy.load_state(rod, &mut reader)?;
+            if let Some(l) = energy.lifecycle_mut() {
+                l.load_state(rod, &mut reader)?;
+            }
             reader.finish()?;
         }
         let saved = state.integrator.saved();

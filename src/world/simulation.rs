@@ -2,13 +2,13 @@
 //! adaptive resolution.
 //!
 //! One step (paper §4.1): move the grabs' targets to the end of the step, start every
-//! energy's step ([`splinerod_energies::Energy::begin_step`]), integrate (forces,
+//! energy's step ([`splinerod_energies::Lifecycle::begin_step`]), integrate (forces,
 //! Jacobians, one sparse solve per Newton iteration), then adapt — insert and remove
 //! knots through the exact maps, with the grabs and every energy's interaction points
 //! as interactions — and report what happened, stage by stage ([`StepReport`]). Every
 //! knot change goes through [`RodSystem::change_knots`], so the energies hear of it.
 //!
-//! An equilibrium solver ([`Integrator::solves_equilibrium`], the static solver) runs
+//! An equilibrium solver ([`Role::Equilibrium`], the static solver) runs
 //! through the same stages: [`Simulation::step`] then gives a quasi-static sequence
 //! (the equilibrium under the loads at the end of each step), and
 //! [`Simulation::settle`] the equilibrium at the current time, re-solved after every
@@ -20,6 +20,7 @@ use crate::world::substep::{StepControl, SubstepCounts, SubstepMemory, SubstepSt
 use crate::{Error, RodSystem};
 use splinerod_adaptivity::{AdaptReport, Adapter, ErrorEstimate};
 use splinerod_core::{Real, Rod};
+use splinerod_integrators::Role;
 use splinerod_integrators::{Integrator, IntegratorError, StepStats};
 use std::time::Instant;
 
@@ -136,12 +137,12 @@ impl Simulation {
     }
 
     /// Solves for the equilibrium at the current time (the integrator must be an
-    /// equilibrium solver, [`Integrator::solves_equilibrium`]), then adapts; while the
+    /// equilibrium solver, [`Role::Equilibrium`]), then adapts; while the
     /// adapt stage changes the knots the equilibrium is solved again, at most
     /// [`MAX_SETTLE_ROUNDS`] times. Time and the step count do not advance. The report
     /// sums the rounds.
     pub fn settle(&mut self) -> Result<StepReport, Error> {
-        if !self.integrator.solves_equilibrium() {
+        if self.integrator.role() == Role::Dynamic {
             let name = self.integrator.name().to_string();
             return Err(Error::NotAnEquilibriumSolver(name));
         }
@@ -207,7 +208,7 @@ impl Simulation {
         // axial ringing it starts, so there the penalty alone holds the constraint. An
         // equilibrium solver updates them itself until the constraint holds.
         let integrator = &self.integrator;
-        if !integrator.conserves_energy() && !integrator.solves_equilibrium() {
+        if !integrator.conserves_energy() && integrator.role() == Role::Dynamic {
             self.system.update_multipliers(false);
         }
         let stage = self.adapter.is_some().then(Instant::now);

@@ -2,7 +2,7 @@
 //!
 //! A step runs named stages, each timed on its own ([`StageTimes`]): **drivers** (the
 //! grabs' targets move to the end of each sub-step), **setup** (every energy's
-//! per-step hook, [`splinerod_energies::Energy::begin_step`]), **integrate** (the
+//! per-step hook, [`splinerod_energies::Lifecycle::begin_step`]), **integrate** (the
 //! integrator's Newton solves, recomputed steps included), **adapt** (error estimate,
 //! marks, knot maps) and **record** (probes, histories and trackers of a run, filled in
 //! by the run loop; observers are not timed).

@@ -48,6 +48,7 @@
 use crate::{Error, Simulation};
 use nalgebra::Vector3;
 use splinerod_core::Real;
+use splinerod_integrators::Role;
 use splinerod_integrators::{IntegratorError, StepStats};
 use std::time::Instant;
 
@@ -143,7 +144,7 @@ impl Simulation {
     /// Covers `[time, time + dt]` with sub-steps (see the module docs). On error the rod
     /// may hold an intermediate state: the caller restores it.
     pub(crate) fn integrate(&mut self, dt: Real) -> Result<(StepStats, SubstepCounts), Error> {
-        if self.integrator.solves_equilibrium() {
+        if self.integrator.role() == Role::Equilibrium {
             // One solve for the loads at the end of the step: no time error to control.
             let (stats, _) = self.try_substep(self.time + dt, dt)?;
             let counts = SubstepCounts {
@@ -264,7 +265,7 @@ impl Simulation {
             0.0
         };
         let setup = Instant::now();
-        if !self.integrator.solves_equilibrium() {
+        if self.integrator.role() == Role::Dynamic {
             self.system.begin_step(h)?;
         }
         self.clock.setup += setup.elapsed().as_secs_f64();
@@ -304,7 +305,10 @@ impl Simulation {
                 Err(_) => Real::NAN,
             })
             .sum();
-        let driven = self.system.energies.iter().any(|e| e.time_dependent());
+        let driven = self.system.energies.iter().any(|e| {
+            let lifecycle = e.capabilities().lifecycle;
+            lifecycle.is_some_and(|l| l.time_dependent())
+        });
         if self.system.grabs.is_empty() && !driven {
             return loads;
         }
@@ -316,10 +320,16 @@ impl Simulation {
             }
         };
         swap(&mut self.system.grabs, &mut self.substep.targets);
-        self.system.energies.iter_mut().for_each(|e| e.drive(start));
+        let energies = self.system.energies.iter_mut();
+        energies
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.drive(start));
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
-        self.system.energies.iter_mut().for_each(|e| e.drive(end));
+        let energies = self.system.energies.iter_mut();
+        energies
+            .filter_map(|e| e.lifecycle_mut())
+            .for_each(|l| l.drive(end));
         now - then + loads
     }
 

@@ -36,6 +36,8 @@ pub struct PinDriver {
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, Cancel, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
 use splinerod_energies::{Energy, EnergySummary, PointForce};
+#[cfg(doc)]
+use splinerod_energies::{Interaction, Lifecycle, Summary};
 use splinerod_integrators::System;
 
 /// A rod with pins and a list of energies. All fields are public state.
@@ -155,7 +157,10 @@ impl RodSystem {
         !self.drivers.is_empty()
             || !self.grabs.is_empty()
             || self.loads.iter().any(|l| l.path.is_some())
-            || self.energies.iter().any(|e| e.time_dependent())
+            || self.energies.iter().any(|e| {
+                let lifecycle = e.capabilities().lifecycle;
+                lifecycle.is_some_and(|l| l.time_dependent())
+            })
     }
 
     /// Moves every driven pin to its path's position at time `t`, and sets every
@@ -172,7 +177,9 @@ impl RodSystem {
             }
         }
         for energy in &mut self.energies {
-            energy.drive(t);
+            if let Some(l) = energy.lifecycle_mut() {
+                l.drive(t);
+            }
         }
     }
 
@@ -208,8 +215,8 @@ impl RodSystem {
         } = self;
         let mut listener = |rod: &Rod, map: &KnotMap| {
             knot_changes.push(crate::world::saved::change_of(map));
-            for e in energies.iter_mut() {
-                e.on_knot_change(rod, map);
+            for l in energies.iter_mut().filter_map(|e| e.lifecycle_mut()) {
+                l.on_knot_change(rod, map);
             }
         };
         let result = change(rod, &mut listener);
@@ -253,52 +260,57 @@ impl RodSystem {
     }
 
     /// Starts an integrator step of `dt` seconds: every energy's
-    /// [`Energy::begin_step`].
+    /// [`Lifecycle::begin_step`].
     pub fn begin_step(&mut self, dt: Real) -> Result<(), CoreError> {
         let rod = &self.rod;
         self.energies
             .iter_mut()
-            .try_for_each(|e| e.begin_step(rod, dt))
+            .filter_map(|e| e.lifecycle_mut())
+            .try_for_each(|l| l.begin_step(rod, dt))
     }
 
     /// Appends the material coordinates (m) where something acts locally now: the
-    /// active grabs, then every energy's [`Energy::interaction_points`].
+    /// active grabs, then every energy's [`Interaction::interaction_points`].
     pub fn interaction_points(&self, out: &mut Vec<Real>) -> Result<(), CoreError> {
         let t = self.time;
         let grabs = self.grabs.iter().filter(|g| g.active(t));
         out.extend(grabs.map(|g| g.spring.at));
         self.energies
             .iter()
-            .try_for_each(|e| e.interaction_points(&self.rod, out))
+            .filter_map(|e| e.capabilities().interaction)
+            .try_for_each(|i| i.interaction_points(&self.rod, out))
     }
 
     /// The force the rod exerts on each rigid obstacle, N, in the order they were given
-    /// ([`Energy::add_obstacle_forces`]); empty without obstacles.
+    /// ([`Interaction::add_obstacle_forces`]); empty without obstacles.
     pub fn obstacle_forces(&self) -> Result<Vec<Vector3<Real>>, CoreError> {
         let mut out = Vec::new();
-        for e in self.acting() {
-            e.add_obstacle_forces(&self.rod, &mut out)?;
+        for i in self.acting().filter_map(|e| e.capabilities().interaction) {
+            i.add_obstacle_forces(&self.rod, &mut out)?;
         }
         Ok(out)
     }
 
-    /// The merged [`Energy::summary`] of every acting energy.
+    /// The merged [`Summary::summary`] of every acting energy.
     pub fn summary(&self) -> Result<EnergySummary, CoreError> {
         let mut total = EnergySummary::default();
-        for e in self.acting() {
+        for e in self.acting().filter_map(|e| e.capabilities().summary) {
             total.merge(&e.summary(&self.rod)?);
         }
         Ok(total)
     }
 
     /// One multiplier update of every energy holding constraints (the inextensible
-    /// rod; see [`Energy::update_multipliers`] for `stiffen`); the largest violation
+    /// rod; see [`Lifecycle::update_multipliers`] for `stiffen`); the largest violation
     /// before it (0 without constraints).
     pub fn update_multipliers(&mut self, stiffen: bool) -> Real {
         let rod = &self.rod;
         self.energies
             .iter_mut()
-            .map(|e| e.update_multipliers(rod, stiffen))
+            .map(|e| {
+                let lifecycle = e.lifecycle_mut();
+                lifecycle.map_or(0.0, |l| l.update_multipliers(rod, stiffen))
+            })
             .fold(0.0, Real::max)
     }
 
@@ -307,8 +319,8 @@ impl RodSystem {
     pub fn tension(&self, s: &[Real]) -> Vec<Real> {
         let mut out = vec![0.0; s.len()];
         let mut any = false;
-        for e in self.acting() {
-            any |= e.add_tension(&self.rod, s, &mut out);
+        for t in self.acting().filter_map(|e| e.capabilities().tension) {
+            any |= t.add_tension(&self.rod, s, &mut out);
         }
         if any {
             out
@@ -386,11 +398,12 @@ impl System for RodSystem {
         self.check_gradient(gradient);
     }
     fn has_hessian_remainder(&self) -> bool {
-        self.acting().any(|e| e.has_hessian_remainder(&self.rod))
+        let mut remainders = self.acting().filter_map(|e| e.capabilities().remainder);
+        remainders.any(|r| r.has_remainder(&self.rod))
     }
     fn add_hessian_remainder(&self, v: &[Vector3<Real>], scale: Real, out: &mut [Vector3<Real>]) {
-        for e in self.acting() {
-            e.add_hessian_remainder(&self.rod, v, scale, out);
+        for r in self.acting().filter_map(|e| e.capabilities().remainder) {
+            r.add_remainder(&self.rod, v, scale, out);
         }
     }
     fn hessian_bandwidth(&self) -> usize {
@@ -400,7 +413,8 @@ impl System for RodSystem {
             .fold(d, usize::max)
     }
     fn admissible(&self) -> bool {
-        self.acting().all(|e| e.admissible(&self.rod))
+        let mut barriers = self.acting().filter_map(|e| e.capabilities().interaction);
+        barriers.all(|i| i.admissible(&self.rod))
     }
     fn update_multipliers(&mut self, stiffen: bool) -> Real {
         RodSystem::update_multipliers(self, stiffen)
@@ -410,8 +424,8 @@ impl System for RodSystem {
     }
     fn set_stiffness_scale(&mut self, scale: Real) -> bool {
         let mut any = false;
-        for e in self.energies.iter_mut() {
-            any |= e.set_stiffness_scale(scale);
+        for l in self.energies.iter_mut().filter_map(|e| e.lifecycle_mut()) {
+            any |= l.set_stiffness_scale(scale);
         }
         any
     }

@@ -3,6 +3,7 @@
 //! frozen forces), checkpoints and the finer copy for error estimates.
 
 use super::{Contact, ContactLaw, SamplePair};
+use crate::capabilities::{Capabilities, Interaction, Lifecycle, Summary};
 use crate::{Energy, EnergySummary};
 use nalgebra::Vector3;
 use splinerod_core::rod::positive;
@@ -13,98 +14,6 @@ use splinerod_core::{
 impl Energy for Contact {
     fn name(&self) -> &str {
         "contact"
-    }
-
-    /// Updates an adapting stiffness ([`Contact::adapt_stiffness`]), then freezes
-    /// friction.
-    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
-        positive("dt", dt)?;
-        self.adapt_stiffness(rod)?;
-        Contact::begin_step(self, rod, dt)
-    }
-
-    /// In a static solve (`stiffen`), raises an adapting stiffness where the tolerance
-    /// is not met (see [`crate::contact::stiffness`]); between time steps nothing (their updates come
-    /// at [`Energy::begin_step`]).
-    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
-        if stiffen {
-            self.stiffen_for_statics(rod)
-        } else {
-            0.0
-        }
-    }
-
-    fn drive(&mut self, t: Real) {
-        self.move_obstacles(t);
-    }
-
-    fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {
-        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
-        detector.forget_topology();
-    }
-
-    fn save_state(&self, out: &mut SavedState) {
-        let detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
-        detector.save_state(out);
-        if self.params.law != ContactLaw::Penalty {
-            out.real(self.penalty.k);
-            out.reals(&self.adapted_at.unwrap_or([Real::NAN; 2]));
-        }
-    }
-
-    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
-        detector.load_state(rod, input)?;
-        if self.params.law != ContactLaw::Penalty {
-            self.set_stiffness(input.real()?)?;
-            let mut at = Vec::new();
-            input.reals_into(&mut at)?;
-            self.adapted_at = match at[..] {
-                [g, f] if !f.is_nan() => Some([g, f]),
-                [_, _] => None,
-                _ => return Err(CoreError::StateMismatch("a contact stiffness state")),
-            };
-        }
-        Ok(())
-    }
-
-    fn time_dependent(&self) -> bool {
-        self.motion.paths.iter().any(Option::is_some)
-    }
-
-    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
-        Contact::interaction_points(self, rod, out)
-    }
-
-    fn admissible(&self, rod: &Rod) -> bool {
-        Contact::admissible(self, rod)
-    }
-
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        Ok(EnergySummary {
-            contact: Some(Contact::summary(self, rod)?),
-            ..EnergySummary::default()
-        })
-    }
-
-    fn add_obstacle_forces(
-        &self,
-        rod: &Rod,
-        out: &mut Vec<Vector3<Real>>,
-    ) -> Result<(), CoreError> {
-        out.extend(self.obstacle_forces(rod)?);
-        Ok(())
-    }
-
-    /// The same contact at its stiffness now, without friction (its frozen data belong
-    /// to the coarse rod's step), for estimators evaluating the energies on a finer copy.
-    fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
-        let mut params = self.params;
-        params.friction = 0.0;
-        let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
-        let mut copy = copy.ok()?;
-        copy.penalty = self.penalty;
-        Some(Box::new(copy) as Box<dyn Energy>)
     }
 
     fn energy(&self, rod: &Rod) -> Real {
@@ -191,5 +100,116 @@ impl Energy for Contact {
         }
         let mu = self.params.friction;
         self.friction_state().add_hessian(rod, mu, hessian);
+    }
+
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            interaction: Some(self),
+            summary: Some(self),
+            ..Capabilities::default()
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Contact {
+    /// Updates an adapting stiffness ([`Contact::adapt_stiffness`]), then freezes
+    /// friction.
+    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
+        positive("dt", dt)?;
+        self.adapt_stiffness(rod)?;
+        Contact::begin_step(self, rod, dt)
+    }
+
+    /// In a static solve (`stiffen`), raises an adapting stiffness where the tolerance
+    /// is not met (see [`crate::contact::stiffness`]); between time steps nothing (their
+    /// updates come at [`Lifecycle::begin_step`]).
+    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
+        if stiffen {
+            self.stiffen_for_statics(rod)
+        } else {
+            0.0
+        }
+    }
+
+    fn drive(&mut self, t: Real) {
+        self.move_obstacles(t);
+    }
+
+    fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.forget_topology();
+    }
+
+    fn save_state(&self, out: &mut SavedState) {
+        let detector = self.detector.lock().unwrap_or_else(|e| e.into_inner());
+        detector.save_state(out);
+        if self.params.law != ContactLaw::Penalty {
+            out.real(self.penalty.k);
+            out.reals(&self.adapted_at.unwrap_or([Real::NAN; 2]));
+        }
+    }
+
+    fn load_state(&mut self, rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
+        let detector = self.detector.get_mut().unwrap_or_else(|e| e.into_inner());
+        detector.load_state(rod, input)?;
+        if self.params.law != ContactLaw::Penalty {
+            self.set_stiffness(input.real()?)?;
+            let mut at = Vec::new();
+            input.reals_into(&mut at)?;
+            self.adapted_at = match at[..] {
+                [g, f] if !f.is_nan() => Some([g, f]),
+                [_, _] => None,
+                _ => return Err(CoreError::StateMismatch("a contact stiffness state")),
+            };
+        }
+        Ok(())
+    }
+
+    fn time_dependent(&self) -> bool {
+        self.motion.paths.iter().any(Option::is_some)
+    }
+
+    /// The same contact at its stiffness now, without friction (its frozen data belong
+    /// to the coarse rod's step), for estimators evaluating the energies on a finer copy.
+    fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
+        let mut params = self.params;
+        params.friction = 0.0;
+        let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
+        let mut copy = copy.ok()?;
+        copy.penalty = self.penalty;
+        Some(Box::new(copy) as Box<dyn Energy>)
+    }
+}
+
+impl Interaction for Contact {
+    fn interaction_points(&self, rod: &Rod, out: &mut Vec<Real>) -> Result<(), CoreError> {
+        Contact::interaction_points(self, rod, out)
+    }
+
+    fn admissible(&self, rod: &Rod) -> bool {
+        Contact::admissible(self, rod)
+    }
+
+    fn add_obstacle_forces(
+        &self,
+        rod: &Rod,
+        out: &mut Vec<Vector3<Real>>,
+    ) -> Result<(), CoreError> {
+        out.extend(self.obstacle_forces(rod)?);
+        Ok(())
+    }
+}
+
+impl Summary for Contact {
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            contact: Some(Contact::summary(self, rod)?),
+            ..EnergySummary::default()
+        })
     }
 }

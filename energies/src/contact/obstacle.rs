@@ -17,7 +17,7 @@
 //! an obstacle much thinner than a knot span is still seen.
 //!
 //! An obstacle may move by a keyframed translation ([`Contact::with_moving_obstacle`]):
-//! [`Energy::drive`](crate::Energy::drive) places it for the step's end, and its friction
+//! [`Lifecycle::drive`](crate::Lifecycle::drive) places it for the step's end, and its friction
 //! contacts measure slip against its surface's motion in the step.
 
 use super::surface::PenaltyPoint;

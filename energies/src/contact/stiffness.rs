@@ -39,7 +39,7 @@
 //! (at most ten times up and a fifth down per step, never below the user's `k_0`, at
 //! most [`PENALTY_MAX_RATIO`] times it).
 //!
-//! **Static solves** adapt between Newton solves instead (`Energy::update_multipliers`,
+//! **Static solves** adapt between Newton solves instead (`Lifecycle::update_multipliers`,
 //! which the static solver repeats until it returns 0): the adaptive penalty raises `k`
 //! while the deepest contact is deeper than `τ`; the barrier raises `κ` only if a contact
 //! overlaps (a load past its quadratic continuation).

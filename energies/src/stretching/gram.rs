@@ -16,7 +16,7 @@
 //! diagonally dominant: \\(G \preceq \mathrm{diag}(m)\\), so
 //! \\(G^{-1} \succeq \mathrm{diag}(m)^{-1}\\). The lumped material stiffness is therefore a
 //! lower bound of the consistent one, which is what makes it a preconditioner for the
-//! Hessian's remainder (see [`crate::Energy::add_hessian_remainder`]).
+//! Hessian's remainder (see [`crate::HessianRemainder::add_remainder`]).
 //!
 //! **Closed rods.** The periodic tension space has `m` functions (the seam's split pairs
 //! `j`, `j + m` are one, [`super::seam`]), and its Gram matrix is cyclic: the last

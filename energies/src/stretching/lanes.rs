@@ -47,7 +47,7 @@ impl MomentTerm<'_> {
 
 impl Stretching {
     /// The lane term of this energy on `rod`: the lumped mixed form on an open rod whose
-    /// table is current (after [`crate::Energy::begin_step`]); `None` otherwise.
+    /// table is current (after [`crate::Lifecycle::begin_step`]); `None` otherwise.
     /// A rod with a rest curve has none: the guard's test ([`guard_idle`]) assumes
     /// unit rest speed.
     pub(super) fn moment_term<'a>(&'a self, rod: &'a Rod) -> Option<LaneTerm<'a>> {
@@ -272,7 +272,7 @@ fn add_function_blocks<const FUSED: bool>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Energy;
+    use crate::{LaneForm, Lifecycle};
     use nalgebra::Vector3;
     use splinerod_core::{BSplineSpace, Material};
 

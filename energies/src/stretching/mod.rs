@@ -31,6 +31,7 @@
 
 mod auto;
 mod blocks;
+mod capabilities;
 mod gram;
 mod guard;
 mod lanes;
@@ -49,13 +50,13 @@ pub(crate) use lanes::add_moment_lanes;
 pub use lanes::MomentTerm;
 pub use multipliers::Multipliers;
 
+use crate::capabilities::{Capabilities, Lifecycle};
 use crate::Energy;
 use guard::GuardSums;
 use nalgebra::{Matrix3, Vector3};
 use point_batch::{PointBatch, Sums};
 use splinerod_core::{
-    BasisSpace, BasisValues, BlockBanded, CoreError, HessianKind, KnotMap, QuadPoint, Real, Rod,
-    SavedState, StateReader,
+    BasisSpace, BasisValues, BlockBanded, CoreError, HessianKind, QuadPoint, Real, Rod,
 };
 use std::sync::Arc;
 
@@ -73,7 +74,7 @@ pub enum StretchFormulation {
     /// Mixed, with the tension coefficients from the consistent Gram matrix instead of
     /// the lumped one (`stretching/tensions.rs`): locking-free and of order `d + 1` on
     /// stretchy rods too. Its Hessian has a remainder that is not banded
-    /// ([`Energy::add_hessian_remainder`]), which Newton's method handles by
+    /// ([`crate::HessianRemainder::add_remainder`]), which Newton's method handles by
     /// preconditioned conjugate gradients.
     MixedConsistent,
 }
@@ -116,7 +117,7 @@ pub struct Stretching {
     /// scenes with contact turn it on.
     pub guard: bool,
     rest: Option<RestMetric>,
-    /// `stiffness` before [`Energy::set_stiffness_scale`] scaled it (`None`: unscaled).
+    /// `stiffness` before [`crate::Lifecycle::set_stiffness_scale`] scaled it (`None`: unscaled).
     unscaled: Option<Real>,
     /// The mixed form's integrals for the rod's current basis ([`table`]).
     table: table::TensionTable,
@@ -177,7 +178,7 @@ impl Stretching {
 
     /// An inextensible rod: the mixed form's constraints (every tension function's mean
     /// strain zero) held by an augmented Lagrangian ([`Multipliers`]); call
-    /// [`Energy::update_multipliers`] after each solve or step.
+    /// [`crate::Lifecycle::update_multipliers`] after each solve or step.
     pub fn inextensible(rod: &Rod) -> Self {
         let mut s = Self {
             stiffness: 1.0,
@@ -393,10 +394,6 @@ fn tangent(qp: &QuadPoint<'_>, positions: &[Vector3<Real>]) -> Vector3<Real> {
 }
 
 impl Energy for Stretching {
-    fn lane_term<'a>(&'a self, rod: &'a Rod) -> Option<crate::LaneTerm<'a>> {
-        self.moment_term(rod)
-    }
-
     fn name(&self) -> &str {
         "stretch"
     }
@@ -451,51 +448,6 @@ impl Energy for Stretching {
         self.add_guard_terms(rod, GuardSums { hessian, gradient });
     }
 
-    fn has_hessian_remainder(&self, _rod: &Rod) -> bool {
-        self.consistent()
-    }
-
-    fn add_hessian_remainder(
-        &self,
-        rod: &Rod,
-        v: &[Vector3<Real>],
-        scale: Real,
-        out: &mut [Vector3<Real>],
-    ) {
-        self.mixed_remainder(rod, v, scale, out);
-    }
-
-    fn add_tension(&self, rod: &Rod, s: &[Real], out: &mut [Real]) -> bool {
-        if self.formulation != StretchFormulation::Pointwise {
-            self.mixed_tension(rod, s, out);
-            return true;
-        }
-        let mut b = BasisValues::default();
-        for (&s, t) in s.iter().zip(out) {
-            if rod.basis().evaluate(s, &mut b).is_ok() {
-                let c1 = b.combine(&b.d1, &rod.positions);
-                let g0 = self.rest_metric_at(s);
-                let eps = 0.5 * (c1.norm_squared() - g0) / g0;
-                *t += self.stiffness * eps * c1.norm() / g0.sqrt();
-            }
-        }
-        true
-    }
-
-    /// The axial stiffness `EA` (an inextensible rod's penalty has its own continuation:
-    /// not scaled).
-    fn set_stiffness_scale(&mut self, scale: Real) -> bool {
-        if self.multipliers.is_some() {
-            return false;
-        }
-        let own = *self.unscaled.get_or_insert(self.stiffness);
-        self.stiffness = if scale == 1.0 { own } else { own * scale };
-        if scale == 1.0 {
-            self.unscaled = None;
-        }
-        true
-    }
-
     fn bandwidth(&self, rod: &Rod) -> usize {
         let d = rod.basis().degree();
         match self.formulation {
@@ -504,46 +456,17 @@ impl Energy for Stretching {
         }
     }
 
-    fn on_knot_change(&mut self, rod: &Rod, _map: &KnotMap) {
-        self.follow(rod);
-    }
-
-    fn begin_step(&mut self, rod: &Rod, _dt: Real) -> Result<(), CoreError> {
-        if !self.table.matches(rod) || (self.consistent() && !self.gram.matches(rod)) {
-            self.tabulate(rod);
-        }
-        Ok(())
-    }
-
-    fn for_finer_rod(&self, fine: &Rod) -> Option<Box<dyn Energy>> {
-        if self.rest.is_none() && self.multipliers.is_none() {
-            return None;
-        }
-        let mut copy = self.clone();
-        copy.follow(fine);
-        Some(Box::new(copy))
-    }
-
-    fn save_state(&self, out: &mut SavedState) {
-        if let Some(m) = &self.multipliers {
-            m.save(out);
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            remainder: Some(self),
+            tension: Some(self),
+            lanes: Some(self),
+            ..Capabilities::default()
         }
     }
 
-    fn load_state(&mut self, _rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        match &mut self.multipliers {
-            Some(m) => m.load(input),
-            None => Ok(()),
-        }
-    }
-
-    fn update_multipliers(&mut self, rod: &Rod, stiffen: bool) -> Real {
-        if self.multipliers.is_none() {
-            return 0.0;
-        }
-        let tensions: Vec<(Real, Real)> = self.with_tensions(rod, |t| t.to_vec());
-        self.multipliers
-            .as_mut()
-            .map_or(0.0, |m| m.update(&tensions, stiffen))
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
     }
 }

@@ -121,6 +121,7 @@ fn add_terms<D: AsRef<[Real]>>(
 mod tests {
     use super::super::{tangent, StretchFormulation, Stretching};
     use crate::Energy;
+    use crate::Lifecycle;
     use nalgebra::Vector3;
     use splinerod_core::{BlockBanded, HessianKind, Real, Rod};
 

@@ -293,6 +293,7 @@ impl Stretching {
 mod tests {
     use super::*;
     use crate::Energy;
+    use crate::Lifecycle;
     use splinerod_core::{BSplineSpace, Material};
 
     /// Gradient and Hessian (dense) of `e` on `rod` by `pass`.

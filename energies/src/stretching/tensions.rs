@@ -16,7 +16,7 @@
 //!
 //! \\[ R = EA\, B^T \left(G^{-1} - \mathrm{diag}(m)^{-1}\right) B \succeq 0, \\]
 //!
-//! is applied to vectors by [`crate::Energy::add_hessian_remainder`] in O(n): one product
+//! is applied to vectors by [`crate::HessianRemainder::add_remainder`] in O(n): one product
 //! with `B`, one banded solve with `G`, one product with \\(B^T\\), the rows of `B` kept
 //! once per state ([`super::rows`]). Newton's method
 //! solves with the banded part factorised and corrects the step by preconditioned

@@ -34,7 +34,7 @@
 //! measures; the curve itself does not move.
 //!
 //! **Cut rods.** A cut leaves pieces with a free end, which carry no twist: once the
-//! energy hears (through [`Energy::on_knot_change`]) that a knot reached multiplicity
+//! energy hears (through [`crate::Lifecycle::on_knot_change`]) that a knot reached multiplicity
 //! `d + 1`, the twist is released and the energy is zero from then on. (Evaluated on a
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
@@ -42,6 +42,7 @@ mod closed;
 pub mod holonomy;
 mod window;
 
+use crate::capabilities::{Capabilities, Lifecycle, Summary};
 use crate::{Energy, EnergySummary, TwistSummary};
 use holonomy::{
     curvature_binormal, curvature_binormal_jacobians, is_cut, signed_angle, transport, wrap,
@@ -119,7 +120,7 @@ pub struct Twisting {
     /// Whether the rod was cut (the twist is released).
     released: bool,
     /// Turn schedules of the start and end clamps about their axes (rad against s);
-    /// [`Energy::drive`] sets `turn` to their difference.
+    /// [`crate::Lifecycle::drive`] sets `turn` to their difference.
     schedules: [Option<Keyframes<Real>>; 2],
     /// The tangent samples (rows cached per basis, tangents per call).
     samples: Mutex<Samples>,
@@ -196,7 +197,7 @@ impl Twisting {
     }
 
     /// These clamps turning about their axes on schedules (rad; `None`: held still):
-    /// [`Energy::drive`] sets [`turn`](Self::turn) to `end(t) − start(t)`.
+    /// [`crate::Lifecycle::drive`] sets [`turn`](Self::turn) to `end(t) − start(t)`.
     pub fn with_turns(
         mut self,
         start: Option<Keyframes<Real>>,
@@ -394,6 +395,20 @@ impl Energy for Twisting {
         samples.bandwidth(rod)
     }
 
+    fn capabilities(&self) -> Capabilities<'_> {
+        Capabilities {
+            lifecycle: Some(self),
+            summary: Some(self),
+            ..Capabilities::default()
+        }
+    }
+
+    fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
+        Some(self)
+    }
+}
+
+impl Lifecycle for Twisting {
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = map;
         self.released |= is_cut(rod);
@@ -413,19 +428,6 @@ impl Energy for Twisting {
 
     fn time_dependent(&self) -> bool {
         self.schedules.iter().any(Option::is_some)
-    }
-
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        Ok(EnergySummary {
-            twist: Some(TwistSummary {
-                twist: self.twist(rod),
-                turn: self.turn,
-                moment: self.moment(rod),
-                axes: [self.start.axis.into(), self.end.axis.into()],
-                start_director: self.start.director.into(),
-            }),
-            ..EnergySummary::default()
-        })
     }
 
     fn save_state(&self, out: &mut SavedState) {
@@ -469,5 +471,20 @@ impl Energy for Twisting {
             self.branch = branch;
         }
         Ok(())
+    }
+}
+
+impl Summary for Twisting {
+    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
+        Ok(EnergySummary {
+            twist: Some(TwistSummary {
+                twist: self.twist(rod),
+                turn: self.turn,
+                moment: self.moment(rod),
+                axes: [self.start.axis.into(), self.end.axis.into()],
+                start_director: self.start.director.into(),
+            }),
+            ..EnergySummary::default()
+        })
     }
 }

@@ -2,7 +2,7 @@
 //! ones).
 
 use super::*;
-use crate::Energy;
+use crate::Lifecycle;
 use splinerod_core::{BSplineSpace, Material};
 
 /// The rows and a remainder product (with a stand-in for the Gram solve) of `e` on
