@@ -23,7 +23,9 @@
 //! interpreter that learns of signals only when asked (Python's `PyErr_CheckSignals`,
 //! which only its main thread may call). It runs only on the thread that attached it,
 //! from inside [`Cancel::requested`] on every [`HOOK_POLLS`]-th poll there, or from
-//! [`Cancel::check`] on every call, at most once per [`HOOK_INTERVAL`]. (Polls on other
+//! [`Cancel::check`] on every call, at most once per [`HOOK_INTERVAL`] of the polling
+//! thread's own work (the interval runs from the hook's return, so a hook that has to
+//! wait does not make every poll wait). (Polls on other
 //! threads — an ensemble's workers — see the request once the hook has raised it.)
 //!
 //! ```
@@ -50,7 +52,7 @@ thread_local! {
 /// A hook is considered on every this many polls of [`Cancel::requested`].
 pub const HOOK_POLLS: u32 = 8;
 
-/// Shortest time between two calls of a hook.
+/// Shortest time between the return of a hook and its next call.
 pub const HOOK_INTERVAL: Duration = Duration::from_millis(20);
 
 /// A shared request to stop (module docs). Cheap to clone and to poll.
@@ -237,12 +239,15 @@ impl Shared {
         if last != 0 && now.saturating_sub(last) < interval {
             return false;
         }
-        hook.last.store(now, Relaxed);
-        if (hook.check)() {
+        let raised = (hook.check)();
+        // The interval runs from the hook's return: a hook that waits (Python's, for the
+        // interpreter lock another Python thread holds, up to its switch interval) would
+        // otherwise be due again at once, and every poll would wait.
+        hook.last.store(self.now(), Relaxed);
+        if raised {
             self.flag.store(true, Relaxed);
-            return true;
         }
-        false
+        raised
     }
 }
 
@@ -264,6 +269,36 @@ mod tests {
         assert!(!d.requested());
         c.cancel();
         assert!(d.requested() && d.abandon());
+    }
+
+    /// A hook that takes longer than the interval (Python's waits for the interpreter
+    /// lock) is called at most once per interval of the poller's own work, not at every
+    /// poll: calls ≤ 1 + (time outside the hook) / interval.
+    #[test]
+    fn a_slow_hook_is_not_called_at_every_poll() {
+        use std::sync::atomic::AtomicUsize;
+        let calls = Arc::new(AtomicUsize::new(0));
+        let counted = calls.clone();
+        let inside = Arc::new(AtomicU64::new(0));
+        let spent = inside.clone();
+        let cancel = Cancel::new().with_hook(move || {
+            let start = Instant::now();
+            std::thread::sleep(HOOK_INTERVAL + Duration::from_millis(10));
+            counted.fetch_add(1, Relaxed);
+            spent.fetch_add(start.elapsed().as_nanos() as u64, Relaxed);
+            false
+        });
+        let start = Instant::now();
+        for _ in 0..40 {
+            assert!(!cancel.check());
+            let work = Instant::now();
+            while work.elapsed() < Duration::from_millis(1) {}
+        }
+        let outside = start.elapsed().as_nanos() as u64 - inside.load(Relaxed);
+        let allowed = 1 + outside / HOOK_INTERVAL.as_nanos() as u64;
+        let made = calls.load(Relaxed) as u64;
+        assert!(made >= 1, "the first check calls the hook");
+        assert!(made <= allowed, "{made} calls, at most {allowed} allowed");
     }
 
     #[test]
