@@ -283,3 +283,43 @@ fn at_its_budget_the_knot_trades_resolution_towards_its_error() {
     );
     assert!(spreads.iter().all(|&s| s <= 10.0), "spreads {spreads:?}");
 }
+
+/// #46, the other side of the budget: the same hidden-style knot needs about 190 control
+/// points for its 0.2 mm (uniform runs still move by centimetres between 64 and 200
+/// points: `cargo run --release --example knot_resolution_study -- 3`), so at 64 the
+/// count cannot fall without giving up resolution the estimate asks for. With a budget
+/// of 200 it can: the count peaks at the budget while the knot forms and falls once it
+/// has pulled tight (measured 200 → at least 147 after the peak, 161 at 3 s, estimate
+/// 3.0e-5 m). Ignored in CI (10 s); the 64-point budget's test above runs there.
+#[test]
+#[ignore]
+fn with_a_budget_for_its_tolerance_the_knot_gives_points_back() {
+    let mut scene = scene("knot_tying_tolerance", 3.0);
+    scene.rod.radius = Some(0.002);
+    let a = scene.adaptivity.as_mut().expect("[adaptivity]");
+    a.tolerance = Some(2e-4);
+    a.max_control_points = 200;
+    let r = splinerod::run(&scene).expect("run");
+    let counts: Vec<usize> = r
+        .control_points_history
+        .iter()
+        .map(|c| c[1] as usize)
+        .collect();
+    let peak = counts.iter().copied().max().expect("counts");
+    let at = counts.iter().position(|&c| c == peak).expect("peak");
+    let least = counts[at..].iter().copied().min().expect("after the peak");
+    let estimate = r.adaptivity.as_ref().expect("estimates").estimated_error;
+    println!(
+        "peak {peak}, least after it {least}, end {}, estimate {estimate:.2e} m",
+        r.control_points
+    );
+    assert!(
+        least as Real <= 0.85 * peak as Real,
+        "peak {peak}, least after it {least}"
+    );
+    assert!(
+        r.control_points < peak,
+        "end {} of a peak {peak}",
+        r.control_points
+    );
+}
