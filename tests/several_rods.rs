@@ -181,6 +181,65 @@ fn two_ropes_crossing_rest_on_each_other() {
     }
 }
 
+/// `output.probes` on any rod (#49 item 5): a plain fraction is on the first rod, a
+/// `{ rod, at }` table on the rod it names; each records that material point, the same
+/// as the rod's own samples there and, rods that do not touch, as the rod alone.
+#[test]
+fn probes_follow_the_rod_they_name() {
+    let probes =
+        "samples = 9\nprobes = [0.5, { rod = \"a\", at = 0.5 }, { at = 1.0, rod = \"b\" }]\n";
+    let joined = run(&accepted(&together().replace("samples = 9\n", probes))).expect("run");
+    let a = alone(ROD_A, PINS_A).replace("samples = 9\n", "samples = 9\nprobes = [0.5]\n");
+    let a = run(&accepted(&a)).expect("a alone");
+    let p = &joined.probes;
+    assert_eq!(p.len(), 3);
+    assert_eq!(
+        (p[0].rod.as_deref(), p[1].rod.as_deref()),
+        (None, Some("a"))
+    );
+    let last = |k: usize| Vector3::from(*p[k].positions.last().expect("positions"));
+    // The last record is the final state: the rods' own samples (9 per rod).
+    let sample = |rod: usize, i: usize| Vector3::from(joined.rods[rod].samples.positions[i]);
+    for (k, rod, i) in [(0, 0, 4), (1, 1, 4), (2, 0, 8)] {
+        let gap = (last(k) - sample(rod, i)).norm();
+        assert!(
+            gap < 1e-12,
+            "probe {k}: {gap:e} m from rods[{rod}] sample {i}"
+        );
+    }
+    assert_eq!(p[1].t.len(), a.probes[0].t.len());
+    for (x, y) in p[1].positions.iter().zip(&a.probes[0].positions) {
+        let gap = (Vector3::from(*x) - Vector3::from(*y)).norm();
+        assert!(gap < 1e-9, "{gap:e} m from rod a alone");
+    }
+    // Bad entries are named.
+    let bad = |entry: &str| {
+        let probes = format!("samples = 9\nprobes = [0.5, {entry}]\n");
+        rejected(&together().replace("samples = 9\n", &probes))
+    };
+    assert_field_value(
+        &bad("{ rod = \"c\", at = 0.5 }"),
+        "output.probes[1].rod",
+        "\"c\"",
+    );
+    assert_field_value(
+        &bad("{ rod = \"a\", at = 1.5 }"),
+        "output.probes[1].at",
+        "1.5",
+    );
+    assert_field_value(
+        &bad("{ rod = \"a\", at = nan }"),
+        "output.probes[1].at",
+        "NaN",
+    );
+    assert_field(&bad("{ rod = \"a\" }"), "output.probes[1]");
+    assert_field(
+        &bad("{ rod = \"a\", at = 0.5, side = 1 }"),
+        "output.probes[1]",
+    );
+    assert_field(&bad("\"middle\""), "output.probes[1]");
+}
+
 #[test]
 fn bad_rods_tables_are_named() {
     let good = together();

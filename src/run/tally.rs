@@ -16,7 +16,10 @@ use std::time::Instant;
 /// The trajectory of one material point.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize, PartialEq)]
 pub struct Probe {
-    /// Material coordinate, fraction of the rest length.
+    /// The rod named by the probe's entry (absent: the first rod).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rod: Option<String>,
+    /// Material coordinate, fraction of that rod's rest length.
     pub s: Real,
     /// Times, s (the initial state first).
     pub t: Vec<Real>,
@@ -121,9 +124,9 @@ impl Tally {
 
     /// Appends the probed material points of `system` at time `t`.
     fn probe(&mut self, scene: &Scene, system: &RodSystem, t: Real) -> Result<(), Error> {
-        for probe in &mut self.probes {
+        for (probe, spec) in self.probes.iter_mut().zip(&scene.output.probes) {
             probe.t.push(t);
-            let p = system.rod.point(scene.material_coordinate(probe.s))?;
+            let p = system.rod.point(scene.probe_coordinate(spec)?)?;
             probe.positions.push(p.into());
         }
         Ok(())
@@ -143,10 +146,11 @@ fn probes_at_start(scene: &Scene, system: &RodSystem) -> Result<Vec<Probe>, Erro
         .output
         .probes
         .iter()
-        .map(|&s| {
-            let p = system.rod.point(scene.material_coordinate(s))?;
+        .map(|spec| {
+            let p = system.rod.point(scene.probe_coordinate(spec)?)?;
             Ok(Probe {
-                s,
+                rod: spec.rod.clone(),
+                s: spec.at,
                 t: vec![0.0],
                 positions: vec![p.into()],
             })

@@ -18,6 +18,7 @@ pub mod limits;
 mod load;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
+mod output_probe;
 pub(crate) mod pins;
 pub(crate) mod plausible;
 mod probe;
@@ -35,6 +36,7 @@ pub use crate::scene::limits::{Limits, Resources};
 pub(crate) use crate::scene::load::parse_error;
 pub use crate::scene::loads::LoadSpec;
 pub use crate::scene::obstacles::ObstacleSpec;
+pub use crate::scene::output_probe::ProbeSpec;
 pub use crate::scene::pins::{PinSpec, WorldSpec};
 pub use crate::scene::plausible::MIN_START_STRETCH;
 pub use crate::scene::problems::Problem;
@@ -275,9 +277,10 @@ pub struct OutputSpec {
     /// Material points reported at the end, evenly spaced in `[0, 1]` (≥ 2). Default 41.
     #[serde(default = "default_samples")]
     pub samples: usize,
-    /// Material points (fractions in `[0, 1]`) whose positions are recorded every step.
+    /// Material points whose positions are recorded every step: fractions in `[0, 1]`
+    /// of the first rod, or `{ rod = "name", at = fraction }` on any rod.
     #[serde(default)]
-    pub probes: Vec<f64>,
+    pub probes: Vec<ProbeSpec>,
     /// Estimate the discretisation error after every step (on without asking when the
     /// adaptivity is tolerance-driven): JSON `adaptivity.estimated_error` and `history`.
     #[serde(default)]
@@ -355,8 +358,8 @@ impl Scene {
                 "must be at least 2",
             ));
         }
-        for (i, &p) in self.output.probes.iter().enumerate() {
-            fraction(&format!("output.probes[{i}]"), p)?;
+        for i in 0..self.output.probes.len() {
+            self.validate_probe(i)?;
         }
         if let Some(e) = &self.ensemble {
             e.validate()?;

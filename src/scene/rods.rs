@@ -125,6 +125,8 @@ impl Scene {
         (sub.grabs, origins.grabs) = self.entries_of(k, "grabs", &self.grabs, |g| &g.rod)?;
         (sub.loads, origins.loads) = self.entries_of(k, "loads", &self.loads, |l| &l.rod)?;
         (sub.cuts, origins.cuts) = self.entries_of(k, "cuts", &self.cuts, |c| &c.rod)?;
+        // Probes may name any rod: the whole scene checks them (`resolve_rods`).
+        sub.output.probes.clear();
         Ok((sub, origins))
     }
 
@@ -184,6 +186,9 @@ impl Scene {
         }
         self.rod = self.rods[0].clone();
         self.check_together()?;
+        for i in 0..self.output.probes.len() {
+            self.validate_probe(i)?;
+        }
         Ok(true)
     }
 
