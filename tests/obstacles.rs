@@ -90,6 +90,16 @@ fn bad_obstacles_name_the_field() {
         ("radius = 0.1", "radius = -0.1", "obstacles[0].radius"),
         ("radius = 0.1", "radius = nan", "obstacles[0].radius"),
         (
+            "radius = 0.1",
+            "radius = 0.1\nfriction = -0.2",
+            "obstacles[0].friction",
+        ),
+        (
+            "radius = 0.1",
+            "radius = 0.1\nfriction = nan",
+            "obstacles[0].friction",
+        ),
+        (
             "centre = [0.0, -0.5, 0.0]",
             "centre = [0.0, inf, 0.0]",
             "obstacles[0].centre",

@@ -240,6 +240,37 @@ fn probes_follow_the_rod_they_name() {
     assert_field(&bad("\"middle\""), "output.probes[1]");
 }
 
+/// #49 item 5: each rod's surface may have its own friction coefficient, and a contact
+/// between two rods takes the smaller: the crossing ropes with coefficients 0.9 (lower)
+/// and 0.5 (upper, whose free ends also touch each other) of their own move bit for bit
+/// as with `[contact] friction = 0.5` for all; with 0.2 on one rope they move otherwise.
+#[test]
+fn a_contact_between_rods_takes_the_smaller_friction() {
+    let base = || {
+        let mut scene = Scene::load(format!(
+            "{}/scenes/ropes_crossing.toml",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+        .expect("scene");
+        scene.solver.duration = Some(0.4);
+        scene.adaptivity = None;
+        scene
+    };
+    let run_with = |mu: Real, own: [Option<Real>; 2]| {
+        let mut scene = base();
+        scene.contact.as_mut().expect("[contact]").friction = mu;
+        for (rod, mu) in scene.rods.iter_mut().zip(own) {
+            rod.friction = mu;
+        }
+        run(&scene).expect("run").samples.positions
+    };
+    let reference = run_with(0.5, [None, None]);
+    // The lower rope 0.9, the upper 0.5 (its ends touch each other too): every contact 0.5.
+    assert_eq!(run_with(0.0, [Some(0.9), Some(0.5)]), reference);
+    assert_eq!(run_with(0.9, [None, Some(0.5)]), reference);
+    assert_ne!(run_with(0.5, [Some(0.2), None]), reference);
+}
+
 #[test]
 fn bad_rods_tables_are_named() {
     let good = together();
@@ -254,6 +285,8 @@ fn bad_rods_tables_are_named() {
     // A rod's own fields and entries are named as in the file.
     let msg = rejected(&good.replace("damping = 0.5", "damping = -0.5"));
     assert_field_value(&msg, "rods[1].damping", "-0.5");
+    let msg = rejected(&good.replace("damping = 0.5", "friction = -0.5"));
+    assert_field_value(&msg, "rods[1].friction", "-0.5");
     let msg = rejected(&good.replace("at = 0.7", "at = 1.7"));
     assert_field_value(&msg, "grabs[0].at", "1.7");
     let msg = rejected(&good.replace("rod = \"b\"\nat = 0.0", "rod = \"b\"\nat = nan"));

@@ -39,7 +39,8 @@
 //!
 //! **Friction** (coefficient `μ`, see the `friction` module): Coulomb friction as a
 //! lagged dissipative potential, frozen at [`Contact::begin_step`], on every contact:
-//! self, floor and obstacles.
+//! self, floor and obstacles; each surface may have its own coefficient and a contact
+//! takes the smaller of its two (the `surfaces` module).
 //!
 //! **What is not modelled:** contacts between segments less than `exclusion`
 //! apart along the rod (neighbours: a rod bent to radius `r` first touches itself at
@@ -60,6 +61,7 @@ mod skin;
 pub mod stiffness;
 mod summary;
 mod surface;
+mod surfaces;
 
 use detect::{ContactPoint, Detector, SamplePair};
 use friction::Friction;
@@ -73,6 +75,7 @@ use splinerod_core::{CoreError, Real, Rod};
 use std::sync::{Mutex, MutexGuard};
 pub use stiffness::ContactLaw;
 pub use summary::ContactSummary;
+use surfaces::SegmentValues;
 
 /// Settings of [`Contact`]. All lengths in m.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -209,25 +212,24 @@ pub struct Contact {
     /// Their keyframed motion.
     motion: obstacle::Motion,
     /// Radii per segment of a joined rod (see [`Contact::with_segment_radii`]).
-    radii: SegmentRadii,
+    radii: SegmentValues,
+    /// Friction coefficients per segment ([`Contact::with_segment_friction`]).
+    frictions: SegmentValues,
+    /// Friction coefficients per obstacle ([`Contact::with_obstacle_friction`]); empty:
+    /// `params.friction` for every obstacle.
+    obstacle_friction: Vec<Real>,
     /// The state of the last stiffness update ([`stiffness`]): the smallest gap
     /// measured and a fingerprint of the positions, so a retried step does not update
     /// again.
     adapted_at: Option<[Real; 2]>,
 }
 
-/// The radius of each segment of a joined rod: `starts[k]` is where segment `k` starts
-/// in the parameter; empty for one radius (`params.radius`).
-#[derive(Debug, Clone, Default, PartialEq)]
-struct SegmentRadii {
-    starts: Vec<Real>,
-    values: Vec<Real>,
-}
-
 impl Clone for Contact {
     fn clone(&self) -> Self {
         Self {
             radii: self.radii.clone(),
+            frictions: self.frictions.clone(),
+            obstacle_friction: self.obstacle_friction.clone(),
             adapted_at: self.adapted_at,
             params: self.params,
             penalty: self.penalty,
@@ -255,7 +257,9 @@ impl Contact {
             friction: Mutex::new(Friction::default()),
             obstacles: Vec::new(),
             motion: obstacle::Motion::default(),
-            radii: SegmentRadii::default(),
+            radii: SegmentValues::default(),
+            frictions: SegmentValues::default(),
+            obstacle_friction: Vec::new(),
         })
     }
 
@@ -273,37 +277,8 @@ impl Contact {
         for &r in radii {
             positive("radius", r)?;
         }
-        let increasing = starts.windows(2).all(|w| w[0] < w[1]);
-        if starts.len() != radii.len() || !increasing || starts.first() != Some(&0.0) {
-            return Err(CoreError::InvalidParameter {
-                name: "segment starts",
-                value: starts.len() as Real,
-                reason: "one increasing start per radius, the first at 0",
-            });
-        }
-        self.radii = SegmentRadii {
-            starts: starts.to_vec(),
-            values: radii.to_vec(),
-        };
+        self.radii = SegmentValues::new(starts, radii)?;
         Ok(self)
-    }
-
-    /// The radius of the rod at material coordinate `s`.
-    pub fn radius_at(&self, s: Real) -> Real {
-        let r = &self.radii;
-        if r.values.is_empty() {
-            return self.params.radius;
-        }
-        let k = r.starts.partition_point(|&t| t <= s).saturating_sub(1);
-        r.values[k]
-    }
-
-    /// The largest radius.
-    fn max_radius(&self) -> Real {
-        self.radii
-            .values
-            .iter()
-            .fold(self.params.radius, |a, &b| a.max(b))
     }
 
     /// Centre-line distance at which the penalty can start for some pair, `2 r_max + δ`.
@@ -386,19 +361,31 @@ impl Contact {
         positive("dt", dt)?;
         let mut friction = self.friction.lock().unwrap_or_else(|e| e.into_inner());
         friction.begin(rod, self.params.slip_speed * dt);
-        if self.params.friction == 0.0 {
+        if !self.has_friction() {
             return Ok(());
         }
         let d = self.detected(rod)?;
         let mut weights = [(0, 0.0); 2 * MAX_ORDER];
+        let s = &d.samples.s;
         for c in &d.pairs {
+            let (a, b) = (s[c.a as usize], s[c.b as usize]);
+            let mu = self.friction_at(a).min(self.friction_at(b));
+            if mu == 0.0 {
+                continue;
+            }
             let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c));
             let len = pair_rows(&d, c, &mut weights);
-            friction.push(&weights[..len], &c.normal, lambda, Vector3::zeros(), None);
+            friction.push(
+                &weights[..len],
+                &c.normal,
+                mu * lambda,
+                Vector3::zeros(),
+                None,
+            );
         }
         drop(d);
-        self.push_surface_friction(rod, dt, |rows, n, lambda, moved, obstacle| {
-            friction.push(rows, n, lambda, moved, obstacle)
+        self.push_surface_friction(rod, dt, |rows, n, bound, moved, obstacle| {
+            friction.push(rows, n, bound, moved, obstacle)
         })
     }
 

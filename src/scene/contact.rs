@@ -177,6 +177,19 @@ impl Scene {
                 (None, _) => contact.with_obstacles([o.obstacle()])?,
             };
         }
+        if self.obstacles.iter().any(|o| o.friction().is_some()) {
+            let mu: Vec<Real> = self
+                .obstacles
+                .iter()
+                .map(|o| o.friction().unwrap_or(spec.friction))
+                .collect();
+            contact = contact.with_obstacle_friction(&mu)?;
+        }
+        if self.rods.is_empty() {
+            if let Some(mu) = self.rod.friction {
+                contact = contact.with_segment_friction(&[0.0], &[mu])?;
+            }
+        }
         Ok(Some(contact))
     }
 }

@@ -147,6 +147,9 @@ pub struct RodSpec {
     pub initial_control_points: Option<Vec<[f64; 3]>>,
     /// Radius of the rod's cross-section, m (> 0). Needed by `[contact]`.
     pub radius: Option<f64>,
+    /// Friction coefficient of its surface in contacts (≥ 0); a contact takes the smaller
+    /// of its two surfaces' coefficients. Default `[contact] friction`.
+    pub friction: Option<f64>,
     /// Initial shape: a loose overhand knot (sets `rest_length` and the control points).
     pub overhand: Option<OverhandShape>,
     /// Stress-free state of stretching: `"arclength"` (default: `s` is rest arclength)
@@ -385,6 +388,9 @@ impl Scene {
         }
         if let Some(c) = &self.contact {
             c.validate(self.rod.radius)?;
+        }
+        if let Some(mu) = self.rod.friction {
+            non_negative("rod.friction", mu)?;
         }
         self.validate_obstacles()?;
         self.loads()?;

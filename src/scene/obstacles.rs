@@ -2,7 +2,7 @@
 //! spheres and capsules, static or translated along a keyframed `path`, the rod stays out of, with `[contact]`'s penalty
 //! stiffness and friction ([`Obstacle`]).
 
-use crate::scene::{finite_vec, positive, Scene};
+use crate::scene::{finite_vec, non_negative, positive, Scene};
 use crate::world::path::Interpolation;
 use crate::Error;
 use nalgebra::Vector3;
@@ -24,6 +24,8 @@ pub enum ObstacleSpec {
         /// How the path moves between keyframes.
         #[serde(default)]
         interpolation: Interpolation,
+        /// Friction coefficient of its surface (≥ 0). Default `[contact] friction`.
+        friction: Option<f64>,
     },
     /// A ball.
     Sphere {
@@ -36,6 +38,8 @@ pub enum ObstacleSpec {
         /// How the path moves between keyframes.
         #[serde(default)]
         interpolation: Interpolation,
+        /// Friction coefficient of its surface (≥ 0). Default `[contact] friction`.
+        friction: Option<f64>,
     },
     /// A cylinder of `radius` around the segment `a`–`b`, with rounded ends.
     Capsule {
@@ -50,6 +54,8 @@ pub enum ObstacleSpec {
         /// How the path moves between keyframes.
         #[serde(default)]
         interpolation: Interpolation,
+        /// Friction coefficient of its surface (≥ 0). Default `[contact] friction`.
+        friction: Option<f64>,
     },
 }
 
@@ -57,6 +63,9 @@ impl ObstacleSpec {
     /// Range checks; errors name `obstacles[i].<field>`.
     fn validate(&self, i: usize) -> Result<(), Error> {
         let field = |name: &str| format!("obstacles[{i}].{name}");
+        if let Some(mu) = self.friction() {
+            non_negative(&field("friction"), mu)?;
+        }
         match self {
             ObstacleSpec::Plane { point, normal, .. } => {
                 finite_vec(&field("point"), *point)?;
@@ -104,6 +113,15 @@ impl ObstacleSpec {
                 interpolation,
                 ..
             } => (path.as_ref(), *interpolation),
+        }
+    }
+
+    /// Its friction coefficient, if it has its own.
+    pub fn friction(&self) -> Option<f64> {
+        match self {
+            ObstacleSpec::Plane { friction, .. }
+            | ObstacleSpec::Sphere { friction, .. }
+            | ObstacleSpec::Capsule { friction, .. } => *friction,
         }
     }
 

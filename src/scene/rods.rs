@@ -51,6 +51,7 @@ impl RodSpec {
             end: None,
             initial_control_points: None,
             radius: None,
+            friction: None,
             overhand: None,
             rest_shape: Default::default(),
             stretch_formulation: Default::default(),
@@ -303,7 +304,16 @@ impl Scene {
         if let Some(contact) = self.contact()? {
             let starts: Vec<Real> = system.rod.segments().iter().map(|g| g.start).collect();
             let radii: Vec<Real> = self.rods.iter().map(|r| r.radius.unwrap_or(0.0)).collect();
-            let contact = contact.with_segment_radii(&starts, &radii)?;
+            let mut contact = contact.with_segment_radii(&starts, &radii)?;
+            if self.rods.iter().any(|r| r.friction.is_some()) {
+                let default = self.contact.as_ref().map_or(0.0, |c| c.friction);
+                let mu: Vec<Real> = self
+                    .rods
+                    .iter()
+                    .map(|r| r.friction.unwrap_or(default))
+                    .collect();
+                contact = contact.with_segment_friction(&starts, &mu)?;
+            }
             system = system.with_energy(contact);
         }
         Ok(system)

@@ -27,7 +27,7 @@ impl Energy for Contact {
             .sum();
         drop(d);
         let surfaces = self.surface_energy(rod).unwrap_or(Real::NAN);
-        e + surfaces + self.friction_state().energy(rod, self.params.friction)
+        e + surfaces + self.friction_state().energy(rod)
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
@@ -54,8 +54,7 @@ impl Energy for Contact {
                 .for_each(|g| *g = Vector3::repeat(Real::NAN));
             return;
         }
-        let mu = self.params.friction;
-        self.friction_state().add_gradient(rod, mu, gradient);
+        self.friction_state().add_gradient(rod, gradient);
     }
 
     fn add_hessian(&self, rod: &Rod, kind: HessianKind, hessian: &mut BlockBanded) {
@@ -98,8 +97,7 @@ impl Energy for Contact {
             hessian.scale(Real::NAN);
             return;
         }
-        let mu = self.params.friction;
-        self.friction_state().add_hessian(rod, mu, hessian);
+        self.friction_state().add_hessian(rod, hessian);
     }
 
     fn capabilities(&self) -> Capabilities<'_> {

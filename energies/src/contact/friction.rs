@@ -27,8 +27,8 @@ pub(crate) struct Lag {
     pub weights: [(usize, Real); 2 * MAX_ORDER],
     pub len: usize,
     pub tangent: Matrix3<Real>,
-    /// Normal force, N.
-    pub lambda: Real,
+    /// Largest friction force `μ λ`, N: the contact's coefficient times its normal force.
+    pub bound: Real,
     /// How far the surface touched moves in the step (a moving obstacle), m: slip is
     /// measured against it.
     pub surface_motion: Vector3<Real>,
@@ -56,13 +56,14 @@ impl Friction {
         self.epoch = Some(rod.topology_epoch());
     }
 
-    /// Adds a lag with weights `weights`, normal `normal`, force `lambda` and the
-    /// surface's motion in the step `surface_motion` (zero but for moving obstacles).
+    /// Adds a lag with weights `weights`, normal `normal`, largest friction force
+    /// `bound` (`μ λ`, N) and the surface's motion in the step `surface_motion` (zero but
+    /// for moving obstacles).
     pub fn push(
         &mut self,
         weights: &[(usize, Real)],
         normal: &Vector3<Real>,
-        lambda: Real,
+        bound: Real,
         surface_motion: Vector3<Real>,
         obstacle: Option<usize>,
     ) {
@@ -70,7 +71,7 @@ impl Friction {
             weights: [(0, 0.0); 2 * MAX_ORDER],
             len: weights.len().min(2 * MAX_ORDER),
             tangent: Matrix3::identity() - normal * normal.transpose(),
-            lambda,
+            bound,
             surface_motion,
             obstacle,
         };
@@ -92,8 +93,8 @@ impl Friction {
         lag.tangent * (moved - lag.surface_motion)
     }
 
-    /// \\(D\\) at the rod's positions, for coefficient `mu`.
-    pub fn energy(&self, rod: &Rod, mu: Real) -> Real {
+    /// \\(D\\) at the rod's positions.
+    pub fn energy(&self, rod: &Rod) -> Real {
         if !self.active(rod) {
             return 0.0;
         }
@@ -107,19 +108,19 @@ impl Friction {
         };
         self.lags
             .iter()
-            .map(|lag| mu * lag.lambda * f0(self.slip(lag, &rod.positions).norm()))
+            .map(|lag| lag.bound * f0(self.slip(lag, &rod.positions).norm()))
             .sum()
     }
 
     /// Adds \\(\partial D/\partial q\\).
-    pub fn add_gradient(&self, rod: &Rod, mu: Real, gradient: &mut [Vector3<Real>]) {
+    pub fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
         if !self.active(rod) {
             return;
         }
         let eps = self.eps;
         for lag in &self.lags {
             let u = self.slip(lag, &rod.positions);
-            let force = u * (mu * lag.lambda / u.norm().max(eps));
+            let force = u * (lag.bound / u.norm().max(eps));
             for &(k, w) in &lag.weights[..lag.len] {
                 gradient[k] += force * w;
             }
@@ -128,20 +129,20 @@ impl Friction {
 
     /// Adds to `forces[i]` the friction force the rod exerts on obstacle `i` at its
     /// positions (the reaction to the force of each lag on the rod).
-    pub fn add_obstacle_forces(&self, rod: &Rod, mu: Real, forces: &mut [Vector3<Real>]) {
+    pub fn add_obstacle_forces(&self, rod: &Rod, forces: &mut [Vector3<Real>]) {
         if !self.active(rod) {
             return;
         }
         for lag in &self.lags {
             if let Some(f) = lag.obstacle.and_then(|i| forces.get_mut(i)) {
                 let u = self.slip(lag, &rod.positions);
-                *f += u * (mu * lag.lambda / u.norm().max(self.eps));
+                *f += u * (lag.bound / u.norm().max(self.eps));
             }
         }
     }
 
     /// Adds the (positive semi-definite) Hessian of \\(D\\).
-    pub fn add_hessian(&self, rod: &Rod, mu: Real, hessian: &mut BlockBanded) {
+    pub fn add_hessian(&self, rod: &Rod, hessian: &mut BlockBanded) {
         if !self.active(rod) {
             return;
         }
@@ -154,7 +155,7 @@ impl Friction {
             } else {
                 let along = u / y;
                 (lag.tangent - along * along.transpose()) / y
-            } * (mu * lag.lambda);
+            } * lag.bound;
             let weights = &lag.weights[..lag.len];
             for (a, &(i, wi)) in weights.iter().enumerate() {
                 for &(j, wj) in &weights[a..] {

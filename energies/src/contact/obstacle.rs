@@ -252,9 +252,9 @@ impl Contact {
                 *f += p.normal * (p.weight * self.penalty.slope(p.gap));
             }
         })?;
-        if self.params.friction > 0.0 {
+        if self.has_friction() {
             let friction = self.friction_state();
-            friction.add_obstacle_forces(rod, self.params.friction, &mut forces);
+            friction.add_obstacle_forces(rod, &mut forces);
         }
         Ok(forces)
     }

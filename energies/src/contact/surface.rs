@@ -114,8 +114,9 @@ impl Contact {
         })
     }
 
-    /// Freezes the surfaces' friction data for a step of `dt` seconds (normal forces,
-    /// directions and, for a moving obstacle, how far its surface moves in the step).
+    /// Freezes the surfaces' friction data for a step of `dt` seconds (largest friction
+    /// forces `μ λ`, directions and, for a moving obstacle, how far its surface moves in
+    /// the step); contacts of coefficient 0 are left out.
     pub(crate) fn push_surface_friction(
         &self,
         rod: &Rod,
@@ -128,11 +129,15 @@ impl Contact {
             for (k, (row, b)) in rows.iter_mut().zip(p.row).enumerate() {
                 *row = (p.first + k, *b);
             }
+            let mu = self.friction_at(p.s).min(self.surface_friction(p.obstacle));
+            if mu == 0.0 {
+                return;
+            }
             let lambda = -p.weight * self.penalty.slope(p.gap);
             let moved = p
                 .obstacle
                 .map_or(Vector3::zeros(), |i| self.motion.step(i, dt));
-            push(&rows[..len], &p.normal, lambda, moved, p.obstacle);
+            push(&rows[..len], &p.normal, mu * lambda, moved, p.obstacle);
         })
     }
 }
