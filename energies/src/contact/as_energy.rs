@@ -172,14 +172,16 @@ impl Lifecycle for Contact {
         self.motion.paths.iter().any(Option::is_some)
     }
 
-    /// The same contact at its stiffness now, without friction (its frozen data belong
-    /// to the coarse rod's step), for estimators evaluating the energies on a finer copy.
+    /// The same contact at its stiffness now, with its segments' radii and without
+    /// friction (its frozen data belong to the coarse rod's step), for estimators
+    /// evaluating the energies on a finer copy.
     fn for_finer_rod(&self, _fine: &Rod) -> Option<Box<dyn Energy>> {
         let mut params = self.params;
         params.friction = 0.0;
         let copy = Contact::new(params).and_then(|c| c.with_obstacles(self.obstacles.clone()));
         let mut copy = copy.ok()?;
         copy.penalty = self.penalty;
+        copy.radii = self.radii.clone();
         Some(Box::new(copy) as Box<dyn Energy>)
     }
 }
