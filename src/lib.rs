@@ -56,6 +56,7 @@
 pub mod bench;
 pub mod bundled;
 mod error;
+pub mod fit;
 pub mod knot;
 pub mod output;
 pub mod problems;

@@ -44,6 +44,7 @@ mod locking;
 mod long_runs;
 mod michell;
 mod moving_obstacles;
+mod observations;
 mod obstacles;
 mod outputs;
 mod pictures;
