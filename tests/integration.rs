@@ -30,6 +30,7 @@ mod contact_tolerance;
 mod cutting;
 mod driven;
 mod ensemble;
+mod fit_least_squares;
 mod friction;
 mod fuzz_scenes;
 mod hard_cases;

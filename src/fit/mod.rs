@@ -2,6 +2,8 @@
 //! observation files ([`observations`]). The least-squares fit driven by the
 //! sensitivities builds on them.
 
+pub mod least_squares;
 pub mod observations;
 
+pub use least_squares::{fit, FitReport, Model, ParameterSpace};
 pub use observations::{Observation, ObservationFile, ObservationKind};
