@@ -1,17 +1,15 @@
 //! Bad scenes are rejected with an error that names the field and the value, never a
-//! panic: through the library (`Scene::from_toml`, `Scene::build_system`, `run`) and
-//! through the `splinerod` command line (exit code 2, one `error:` line on stderr).
+//! panic, through the library (`Scene::from_toml`, `Scene::build_system`, `run`); the
+//! command line's side is `bad_input_cli.rs`.
 
 use crate::common;
 
 use common::*;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 /// A valid scene that every test alters by one small substitution.
-const BASE: &str = r#"[rod]
+pub(crate) const BASE: &str = r#"[rod]
 rest_length = 1.0
 linear_density = 0.1
 stretch_stiffness = 100.0
@@ -44,7 +42,7 @@ probes = [0.5]
 "#;
 
 /// The base scene with the value of `key` replaced.
-fn set(key: &str, value: &str) -> String {
+pub(crate) fn set(key: &str, value: &str) -> String {
     set_in(BASE, key, value)
 }
 
@@ -54,7 +52,7 @@ fn without(key: &str) -> String {
 }
 
 /// The base scene with `line` added after the header `table`.
-fn with_line(table: &str, line: &str) -> String {
+pub(crate) fn with_line(table: &str, line: &str) -> String {
     with_line_in(BASE, table, line)
 }
 
@@ -324,121 +322,6 @@ fn too_few_samples() {
     }
 }
 
-// ---------------------------------------------------------------- command line
-
-/// A fresh directory for one CLI test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("splinerod-bad-input-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn splinerod(args: &[&Path]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinerod"))
-        .arg("run")
-        .args(args)
-        .output()
-        .expect("the splinerod binary runs")
-}
-
-/// Runs `splinerod run` on `path`, which must fail with code 2 and one `error:` line.
-fn cli_error(path: &Path) -> String {
-    let out = splinerod(&[path]);
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.starts_with("error:"), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
-    stderr
-}
-
-/// Writes `text` to a fresh directory and runs the CLI on it; the error line.
-fn cli_error_for(test: &str, text: &str) -> String {
-    let dir = temp_dir(test);
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, text).unwrap();
-    let stderr = cli_error(&path);
-    std::fs::remove_dir_all(&dir).unwrap();
-    stderr
-}
-
-#[test]
-fn cli_nan_density() {
-    let stderr = cli_error_for("nan", &set("linear_density", "nan"));
-    assert_field_value(&stderr, "rod.linear_density", "NaN");
-}
-
-#[test]
-fn cli_unknown_field() {
-    let stderr = cli_error_for("unknown", &with_line("[rod]", "colour = \"red\""));
-    assert_field(&stderr, "rod.colour");
-    assert!(stderr.contains("scene.toml"), "file not named: {stderr}");
-}
-
-#[test]
-fn cli_missing_file() {
-    let dir = temp_dir("missing");
-    let path = dir.join("no_such_scene.toml");
-    let stderr = cli_error(&path);
-    assert!(stderr.contains(&path.display().to_string()), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
-#[test]
-fn cli_malformed_toml() {
-    let text = BASE.replacen("linear_density = 0.1", "linear_density = = 0.1", 1);
-    let stderr = cli_error_for("syntax", &text);
-    assert!(stderr.contains("scene.toml"), "file not named: {stderr}");
-    assert!(stderr.contains("line 3"), "line not named: {stderr}");
-    let unclosed = BASE.replacen("[world]", "[world", 1);
-    let stderr = cli_error_for("unclosed", &unclosed);
-    assert!(stderr.contains("line 18"), "line not named: {stderr}");
-}
-
-/// `value[path]` for a dotted `path`, which must exist.
-fn get<'a>(value: &'a serde_json::Value, path: &str) -> &'a serde_json::Value {
-    path.split('.').fold(value, |v, key| {
-        v.get(key).unwrap_or_else(|| panic!("JSON has no `{path}`"))
-    })
-}
-
-#[test]
-fn cli_valid_scene_writes_json() {
-    let dir = temp_dir("valid");
-    let json = dir.join("out.json");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/catenary_static.toml");
-    let out = splinerod(&[&scene, Path::new("--json"), &json]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(0), "stderr: {stderr}");
-    let text = std::fs::read_to_string(&json).expect("JSON written");
-    let result: serde_json::Value = serde_json::from_str(&text).expect("valid JSON");
-    for key in ["time", "steps", "control_points", "wall_seconds"] {
-        assert!(get(&result, key).is_number(), "`{key}` is not a number");
-    }
-    for key in ["energy.kinetic", "energy.stretch", "energy.gravity"] {
-        assert!(get(&result, key).as_f64().unwrap().is_finite(), "`{key}`");
-    }
-    let s = get(&result, "samples.s").as_array().unwrap();
-    let positions = get(&result, "samples.positions").as_array().unwrap();
-    assert!(s.len() >= 2);
-    assert_eq!(s.len(), positions.len());
-    assert!(positions.iter().all(|p| p.as_array().unwrap().len() == 3));
-    for key in ["probes", "knots", "pin_forces"] {
-        assert!(get(&result, key).is_array(), "`{key}` is not an array");
-    }
-    assert!(get(&result, "solver.newton_iterations").is_number());
-    for key in ["substeps", "rejected_steps", "continuation_steps"] {
-        assert!(get(&result, &format!("solver.{key}")).is_number(), "{key}");
-    }
-    assert!(
-        get(&result, "solver.smallest_dt").is_null(),
-        "static: no dt"
-    );
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
 #[test]
 fn sub_stepping_settings_out_of_range() {
     let with = |line: &str| with_line("[solver]", line);
@@ -449,9 +332,9 @@ fn sub_stepping_settings_out_of_range() {
     assert_field_value(&message, "solver.min_dt", "0.02");
     assert!(message.contains("solver.dt"), "{message}");
     accepted(&with("min_dt = 0.01"));
-    let stderr = cli_error_for("min_dt", &with("min_dt = 0.5"));
+    let stderr = common::cli::refused_scene("min_dt", &with("min_dt = 0.5"));
     assert!(stderr.contains("solver.min_dt"), "{stderr}");
-    let stderr = cli_error_for("time_tolerance", &with("time_tolerance = nan"));
+    let stderr = common::cli::refused_scene("time_tolerance", &with("time_tolerance = nan"));
     assert!(stderr.contains("solver.time_tolerance"), "{stderr}");
     let message = rejected(&with("accept_unconverged = 1"));
     assert!(message.contains("accept_unconverged"), "{message}");

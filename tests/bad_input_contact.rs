@@ -6,11 +6,9 @@
 use crate::common;
 
 use common::*;
-use splinerod::knot::OverhandSpec;
 use splinerod::Scene;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 /// A valid straight rod with a radius and contact against a floor; every test alters it
 /// by one small substitution.
@@ -34,30 +32,6 @@ floor = -0.4
 method = "implicit-euler"
 dt = 0.01
 duration = 0.05
-"#;
-
-/// A valid rod with a preformed overhand knot (as `scenes/knot_tying.toml`).
-const KNOT: &str = r#"[rod]
-linear_density = 0.01
-stretch_stiffness = 100.0
-control_points = 11
-radius = 0.003
-rest_shape = "initial"
-
-[rod.overhand]
-size = 0.15
-span = 0.5
-
-[[pins]]
-at = 0.0
-
-[contact]
-stiffness = 1e4
-
-[solver]
-method = "implicit-euler"
-dt = 0.001
-duration = 0.01
 "#;
 
 /// `text` with the `[contact]` table (header and body, up to the next table) removed.
@@ -358,140 +332,20 @@ fn rest_length_most_negative_float_is_not_missing() {
 // ---------------------------------------------------------------- [rod.overhand]
 
 #[test]
-fn overhand_conflicts_name_the_field() {
-    for (line, field) in [
-        ("rest_length = 1.0", "rod.rest_length"),
-        ("start = [0.0, 0.0, 0.0]", "rod.start"),
-        ("end = [0.5, 0.0, 0.0]", "rod.end"),
-        ("knots = \"uniform\"", "rod.knots"),
-        (
-            "knots = [0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 8, 8, 8]",
-            "rod.knots",
-        ),
-        (
-            "initial_control_points = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0], \
-             [0.3, 0.0, 0.0], [0.4, 0.0, 0.0], [0.5, 0.0, 0.0], [0.6, 0.0, 0.0], \
-             [0.7, 0.0, 0.0], [0.8, 0.0, 0.0], [0.9, 0.0, 0.0], [1.0, 0.0, 0.0]]",
-            "rod.initial_control_points",
-        ),
-    ] {
-        let message = rejected(&with_line_in(KNOT, "[rod]", line));
-        assert_field(&message, field);
-        assert!(message.contains("overhand"), "{line}: {message}");
-    }
-    // The default knots, spelled out, are not a conflict.
-    accepted(&with_line_in(KNOT, "[rod]", "knots = \"clamped\""));
-}
-
-#[test]
-fn bad_overhand_size() {
-    for value in ["0.0", "-0.15", "-1.0", "nan", "inf"] {
-        let message = rejected(&set_in(KNOT, "size", value));
-        assert_field_value(&message, "rod.overhand.size", &shown(value));
-    }
-}
-
-#[test]
-fn bad_overhand_span() {
-    for value in ["0.0", "-0.5", "nan", "inf"] {
-        let message = rejected(&set_in(KNOT, "span", value));
-        assert_field_value(&message, "rod.overhand.span", &shown(value));
-    }
-    let spec = OverhandSpec {
-        size: 0.15,
-        span: 0.5,
-        control_points: 11,
-        degree: 3,
-    };
-    let min = spec.min_span();
-    assert!(min > 0.0 && min < 0.5, "min_span {min}");
-    for span in [0.5 * min, 0.99 * min, min] {
-        let message = rejected(&set_in(KNOT, "span", &span.to_string()));
-        assert_field_value(&message, "rod.overhand.span", &span.to_string());
-        assert!(message.contains("width"), "{message}");
-    }
-    accepted(&set_in(KNOT, "span", &(1.2 * min).to_string()));
-}
-
-#[test]
-fn overhand_missing_or_unknown_fields() {
-    let message = rejected(&without_in(KNOT, "span"));
-    assert!(message.contains("missing field"), "{message}");
-    assert_field(&message, "rod.overhand.span");
-    let message = rejected(&without_in(KNOT, "size"));
-    assert_field(&message, "rod.overhand.size");
-    let message = rejected(&with_line_in(KNOT, "[rod.overhand]", "turns = 2"));
-    assert_field(&message, "rod.overhand.turns");
-}
-
-#[test]
-fn overhand_too_few_control_points() {
-    for n in ["5", "6", "3", "2", "0"] {
-        let message = rejected(&set_in(KNOT, "control_points", n));
-        assert_field_value(&message, "rod.control_points", n);
-    }
-    let message = rejected(&set_in(KNOT, "control_points", "500"));
-    assert_field_value(&message, "rod.control_points", "500");
-}
-
-#[test]
-fn overhand_bad_degree() {
-    for degree in ["0", "10"] {
-        let message = rejected(&with_line_in(KNOT, "[rod]", &format!("degree = {degree}")));
-        assert!(
-            message.contains("rod.overhand.degree") || message.contains("rod.degree"),
-            "degree = {degree}: {message}"
-        );
-    }
-}
-
-// ---------------------------------------------------------------- command line
-
-/// A fresh directory for one CLI test.
-fn temp_dir(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "splinerod-bad-input-contact-{}-{test}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Writes `text` to a fresh directory and runs `splinerod run` on it, which must fail
-/// with code 2 and one `error:` line; that line.
-fn cli_error_for(test: &str, text: &str) -> String {
-    let dir = temp_dir(test);
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, text).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_splinerod"))
-        .arg("run")
-        .arg(&path)
-        .output()
-        .expect("the splinerod binary runs");
-    std::fs::remove_dir_all(&dir).unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.starts_with("error:"), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "stderr: {stderr}");
-    stderr
-}
-
-#[test]
 fn cli_bad_contact_exits_with_2() {
-    let stderr = cli_error_for(
+    let stderr = common::cli::refused_scene(
         "friction",
         &with_line_in(BASE, "[contact]", "friction = -0.3"),
     );
     assert_field_value(&stderr, "contact.friction", "-0.3");
-    let stderr = cli_error_for("slip", &with_line_in(BASE, "[contact]", "slip_speed = 0.0"));
+    let stderr =
+        common::cli::refused_scene("slip", &with_line_in(BASE, "[contact]", "slip_speed = 0.0"));
     assert_field_value(&stderr, "contact.slip_speed", "0");
-    let stderr = cli_error_for("stiffness", &set_in(BASE, "stiffness", "0.0"));
+    let stderr = common::cli::refused_scene("stiffness", &set_in(BASE, "stiffness", "0.0"));
     assert_field_value(&stderr, "contact.stiffness", "0");
-    let stderr = cli_error_for("radius", &without_in(BASE, "radius"));
+    let stderr = common::cli::refused_scene("radius", &without_in(BASE, "radius"));
     assert_field(&stderr, "rod.radius");
-    let stderr = cli_error_for(
+    let stderr = common::cli::refused_scene(
         "overhand",
         &with_line_in(KNOT, "[rod]", "rest_length = 1.0"),
     );

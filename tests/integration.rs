@@ -11,8 +11,10 @@ mod common;
 
 mod adaptivity;
 mod bad_input;
+mod bad_input_cli;
 mod bad_input_contact;
 mod bad_input_extensions;
+mod bad_input_overhand;
 mod batched;
 mod bench;
 mod bending;

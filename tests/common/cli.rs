@@ -56,3 +56,14 @@ pub fn scene_variant(dir: &Path, name: &str, edits: &[(&str, &str)]) -> PathBuf 
     std::fs::write(&path, text).expect("scene written");
     path
 }
+
+/// Writes `text` as `scene.toml` into a fresh directory for `test` and runs `splinerod
+/// run` on it, which must exit with 2 and one error line; that line.
+pub fn refused_scene(test: &str, text: &str) -> String {
+    let dir = fresh_dir(test);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).expect("scene written");
+    let line = refused(&["run", path.to_str().expect("a UTF-8 path")]);
+    let _ = std::fs::remove_dir_all(&dir);
+    line
+}

@@ -108,3 +108,27 @@ pub fn sample_gap(a: &splinerod::RunResult, b: &splinerod::RunResult) -> f64 {
         .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
         .fold(0.0, f64::max)
 }
+
+/// A valid rod with a preformed overhand knot (as `scenes/knot_tying.toml`).
+pub const KNOT: &str = r#"[rod]
+linear_density = 0.01
+stretch_stiffness = 100.0
+control_points = 11
+radius = 0.003
+rest_shape = "initial"
+
+[rod.overhand]
+size = 0.15
+span = 0.5
+
+[[pins]]
+at = 0.0
+
+[contact]
+stiffness = 1e4
+
+[solver]
+method = "implicit-euler"
+dt = 0.001
+duration = 0.01
+"#;
