@@ -16,8 +16,8 @@ use std::time::Instant;
 /// The trajectory of one material point.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize, PartialEq)]
 pub struct Probe {
-    /// The rod named by the probe's entry (absent: the first rod).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// The rod named by the probe's entry (`None`, JSON `null`: a plain fraction, on the
+    /// first rod). Always written: checkpoints are a format without field names.
     pub rod: Option<String>,
     /// Material coordinate, fraction of that rod's rest length.
     pub s: Real,
