@@ -63,6 +63,7 @@ pub mod problems;
 pub mod report;
 pub mod run;
 pub mod scene;
+pub mod sensitivity;
 pub mod world;
 
 // The paths of the flat layout before the modules above, kept so code written against

@@ -59,6 +59,7 @@ mod robustness;
 mod run_imports;
 mod scene_errors;
 mod scenes;
+mod sensitivities;
 mod session;
 mod several_rods;
 mod shards;

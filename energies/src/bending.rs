@@ -321,6 +321,7 @@ impl Energy for Bending {
         Capabilities {
             lifecycle: Some(self),
             lanes: Some(self),
+            parameters: Some(self),
             ..Capabilities::default()
         }
     }

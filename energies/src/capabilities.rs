@@ -11,7 +11,7 @@
 //! [`time_dependent`](Lifecycle::time_dependent) and the pair
 //! [`save_state`](Lifecycle::save_state) / [`load_state`](Lifecycle::load_state).
 //!
-//! **Adding a capability** (parameter derivatives, say) is one trait, one field of
+//! **Adding a capability** (as parameter derivatives were, [`crate::parameters`]) is one trait, one field of
 //! [`Capabilities`] (default `None`: no energy changes) and its mapping through a
 //! decorator in [`crate::decorate`] (the compiler asks for it: [`Capabilities::through`]
 //! lists every field); no decorator is edited by hand.
@@ -35,6 +35,8 @@ pub struct Capabilities<'a> {
     pub lanes: Option<&'a dyn LaneForm>,
     /// Statistics for reports.
     pub summary: Option<&'a dyn Summary>,
+    /// Scalar parameters and the derivative of the gradient by each (sensitivities).
+    pub parameters: Option<&'a dyn crate::Parameters>,
     /// The segment of a joined rod this energy acts on alone ([`crate::OnSegment`]);
     /// `None` for an energy of the whole rod.
     pub segment: Option<usize>,

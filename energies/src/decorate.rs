@@ -28,7 +28,7 @@
 use crate::capabilities::{
     Capabilities, HessianRemainder, Interaction, LaneForm, Lifecycle, Summary, Tension,
 };
-use crate::{Energy, EnergySummary, LaneTerm};
+use crate::{Energy, EnergySummary, LaneTerm, Parameters};
 use nalgebra::Vector3;
 use splinerod_core::{CoreError, KnotMap, Real, Rod, SavedState, StateReader};
 
@@ -96,6 +96,7 @@ impl<'a> Capabilities<'a> {
             tension,
             lanes,
             summary,
+            parameters,
             segment,
         } = self;
         Capabilities {
@@ -105,6 +106,7 @@ impl<'a> Capabilities<'a> {
             tension: tension.map(|_| d as &dyn Tension),
             lanes: lanes.map(|_| d as &dyn LaneForm),
             summary: summary.map(|_| d as &dyn Summary),
+            parameters: parameters.map(|_| d as &dyn Parameters),
             segment,
         }
     }
@@ -278,5 +280,30 @@ impl<D: Decorator> Summary for D {
         };
         self.view(rod, summary)
             .unwrap_or(Ok(EnergySummary::default()))
+    }
+}
+
+impl<D: Decorator> Parameters for D {
+    fn parameter_names(&self) -> &[&'static str] {
+        self.inner()
+            .capabilities()
+            .parameters
+            .map_or(&[], |p| p.parameter_names())
+    }
+
+    fn add_gradient_derivative(
+        &self,
+        rod: &Rod,
+        name: &str,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
+        let first = self.placement(rod).first;
+        let derivative = |e: &dyn Energy, r: &Rod| {
+            let out = &mut out[first..first + r.len()];
+            e.capabilities()
+                .parameters
+                .map_or(Ok(false), |p| p.add_gradient_derivative(r, name, out))
+        };
+        self.view(rod, derivative).unwrap_or(Ok(false))
     }
 }

@@ -50,6 +50,7 @@ impl Energy for Gravity {
     fn capabilities(&self) -> Capabilities<'_> {
         Capabilities {
             lanes: Some(self),
+            parameters: Some(self),
             ..Capabilities::default()
         }
     }

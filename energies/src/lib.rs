@@ -43,6 +43,7 @@ mod energy;
 mod gravity;
 pub mod lanes;
 mod on_segment;
+pub mod parameters;
 mod point_force;
 mod point_spring;
 mod stretching;
@@ -61,6 +62,7 @@ pub use energy::{finite_difference_hessian, Energy, EnergySummary, TwistSummary}
 pub use gravity::Gravity;
 pub use lanes::LaneTerm;
 pub use on_segment::OnSegment;
+pub use parameters::Parameters;
 pub use point_force::PointForce;
 pub use point_spring::PointSpring;
 pub use stretching::{

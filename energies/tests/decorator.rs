@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use splinerod_core::{CoreError, KnotMap, Real, Rod, SavedState, StateReader};
 use splinerod_energies::{
     Capabilities, Energy, EnergySummary, HessianRemainder, Interaction, LaneForm, LaneTerm,
-    Lifecycle, OnSegment, Summary, Tension, TwistSummary,
+    Lifecycle, OnSegment, Parameters, Summary, Tension, TwistSummary,
 };
 use std::sync::{Arc, Mutex};
 
@@ -52,6 +52,7 @@ impl Energy for Everything {
             tension: Some(self),
             lanes: Some(self),
             summary: Some(self),
+            parameters: Some(self),
             segment: None,
         }
     }
@@ -146,6 +147,23 @@ impl LaneForm for Everything {
     }
 }
 
+impl Parameters for Everything {
+    fn parameter_names(&self) -> &[&'static str] {
+        &["k"]
+    }
+    fn add_gradient_derivative(
+        &self,
+        rod: &Rod,
+        name: &str,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
+        if name != "k" {
+            return Ok(false);
+        }
+        splinerod_energies::parameters::add_linear(self, rod, self.k, out)
+    }
+}
+
 impl Summary for Everything {
     fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
         let twist = TwistSummary {
@@ -185,6 +203,7 @@ fn on_segment_keeps_every_capability_of_what_it_wraps() {
         tension: Some(tension),
         lanes: Some(lanes),
         summary: Some(summary),
+        parameters: Some(parameters),
         segment: Some(1),
     } = caps
     else {
@@ -250,6 +269,25 @@ fn on_segment_keeps_every_capability_of_what_it_wraps() {
         .twist
         .expect("twist");
     assert_eq!(twist.twist, n as Real);
+
+    // Parameters: named as inside, the derivative on the part's control points only
+    // (E = k/2 |q|², so ∂∇E/∂k = q there).
+    assert_eq!(parameters.parameter_names(), &["k"]);
+    let mut d = vec![Vector3::zeros(); joined.len()];
+    assert!(parameters
+        .add_gradient_derivative(&joined, "k", &mut d)
+        .expect("k"));
+    assert!(!parameters
+        .add_gradient_derivative(&joined, "m", &mut d)
+        .expect("m"));
+    for (i, di) in d.iter().enumerate() {
+        let expected = if points.contains(&i) {
+            joined.positions[i]
+        } else {
+            Vector3::zeros()
+        };
+        assert!((di - expected).norm() < 1e-12, "derivative at {i}: {di:?}");
+    }
 
     // Lifecycle, mutable side: every hook reaches the inner energy with the part.
     let lifecycle = wrapped.lifecycle_mut().expect("a lifecycle");

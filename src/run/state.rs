@@ -39,7 +39,11 @@ pub(crate) fn build_members(
 /// Prepares a member for its first stage: a static solve starts at the time the grabs,
 /// driven pins, turning clamps, moving obstacles and keyframed loads reach their final
 /// targets, with every cut made; a dynamic one with the cuts due at time zero.
-fn prepare(scene: &Scene, sim: &mut Simulation, cuts: &mut CutSchedule) -> Result<(), Error> {
+pub(crate) fn prepare(
+    scene: &Scene,
+    sim: &mut Simulation,
+    cuts: &mut CutSchedule,
+) -> Result<(), Error> {
     if scene.solver.method == Method::Static {
         let grabs = scene.grabs.iter().map(|g| g.end_time);
         let paths = sim.system.drivers.iter().map(|d| d.path.end_time());

@@ -462,6 +462,7 @@ impl Energy for Stretching {
             remainder: Some(self),
             tension: Some(self),
             lanes: Some(self),
+            parameters: Some(self),
             ..Capabilities::default()
         }
     }

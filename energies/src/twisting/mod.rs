@@ -399,6 +399,7 @@ impl Energy for Twisting {
         Capabilities {
             lifecycle: Some(self),
             summary: Some(self),
+            parameters: Some(self),
             ..Capabilities::default()
         }
     }

@@ -19,6 +19,7 @@
 //! ([`crate::lane_euler`]) owns too; [`crate::convergence`] states the rules and why.
 
 mod line_search;
+mod linearized;
 
 use crate::convergence::ConvergenceTracker;
 pub use crate::convergence::{DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
@@ -27,6 +28,7 @@ use crate::linear::{LinearSolver, LinearSolverKind};
 use crate::remainder::{RemainderCg, MOTION_FRACTION, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
 use line_search::{line_search, Trial};
+pub(crate) use linearized::solve_linearized;
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
 

@@ -329,6 +329,32 @@ impl StaticSolver {
         self.workspace.multipliers()
     }
 
+    /// Sensitivities of the equilibrium the system is at (after [`Self::solve`]): for
+    /// each `rhs[k]`, the derivative \(b_k = \partial \nabla E / \partial p_k\) of the
+    /// potential's gradient by a parameter on entry, the derivative of the control
+    /// points \(\mathrm{d}q/\mathrm{d}p_k\) on return, from \(K\, \dot q = -b_k\) with
+    /// the exact Hessian `K` and the pins held (`newton/linearized.rs`). An error if the
+    /// exact Hessian cannot be factorised (the equilibrium is singular there).
+    pub fn sensitivities(
+        &mut self,
+        system: &dyn System,
+        rhs: &mut [Vec<Vector3<Real>>],
+    ) -> Result<(), IntegratorError> {
+        let mut exact = StaticProblem {
+            regularization: 0.0,
+            kind: HessianKind::Exact,
+            rho: 0.0,
+        };
+        let (ws, kind) = (&mut self.workspace, self.params.linear_solver);
+        newton::solve_linearized(&mut exact, system, ws, kind, rhs)?;
+        if exact.kind != HessianKind::Exact {
+            return Err(IntegratorError::NotPositiveDefinite {
+                context: "the equilibrium's exact Hessian (sensitivities)",
+            });
+        }
+        Ok(())
+    }
+
     /// [`StaticSolver::solve`], repeated with updated multipliers
     /// ([`System::update_multipliers`]) while a constraint (the inextensible rod) is
     /// violated by more than [`CONSTRAINT_TOLERANCE`], at most

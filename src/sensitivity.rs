@@ -1,0 +1,300 @@
+//! Exact sensitivities of a static scene's equilibrium to its scalar parameters (issue
+//! #48, item 1, the static part): for the equilibrium `q(p)` of
+//! \\(\nabla E(q; p) + G^T \mu = 0\\), `G q = c`, the implicit-function theorem gives
+//!
+//! \\[ K\, \frac{\mathrm{d}q}{\mathrm{d}p} = -\frac{\partial \nabla E}{\partial p}, \qquad
+//! G\, \frac{\mathrm{d}q}{\mathrm{d}p} = 0, \\]
+//!
+//! one solve with the factorised exact Hessian `K` per parameter
+//! ([`splinerod_integrators::StaticSolver::sensitivities`]). Each energy gives
+//! \\(\partial \nabla E / \partial p\\) through its
+//! [`Parameters`](splinerod_energies::Parameters) capability; a point
+//! load's is \\(-b_i(s)\, e_c\\). The derivative of a material point is then
+//! \\(\sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p\\).
+//!
+//! **Parameters**, named by their scene path: `rod.stretch_stiffness`,
+//! `rod.bending_stiffness`, `rod.twist_stiffness`, `rod.linear_density` (through the
+//! weight), the same on `rods[k].…` of a `[[rods]]` scene, `world.gravity[c]` and
+//! `loads[i].force[c]`. Anything else — an unknown path, a vector without its index, a
+//! parameter no energy of the scene depends on — is an error naming the path.
+//!
+//! Not yet: dynamic runs (forward sensitivities through the integrators' steps), pin
+//! positions, pin forces' derivatives and the command line.
+
+use crate::{Error, RodSystem, Scene};
+use nalgebra::Vector3;
+use splinerod_core::Real;
+use splinerod_integrators::StaticSolver;
+
+/// The sensitivities of a static scene's equilibrium.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct StaticSensitivities {
+    /// The parameters, by scene path, with their values.
+    pub parameters: Vec<(String, Real)>,
+    /// The output samples' material coordinates (fractions of the first rod's length).
+    pub s: Vec<Real>,
+    /// Per parameter, the derivative of each sample's equilibrium position, m per unit.
+    pub positions: Vec<Vec<[Real; 3]>>,
+    /// The equilibrium positions of the samples, m.
+    pub at: Vec<[Real; 3]>,
+    /// Per parameter, the derivative of every control point.
+    #[serde(skip)]
+    pub control_points: Vec<Vec<Vector3<Real>>>,
+}
+
+/// What a parameter path names.
+enum Target {
+    /// An energy parameter: its name and the segment (`None`: any energy of the rod).
+    Energy(&'static str, Option<usize>),
+    /// Component `c` of load `i`'s force.
+    Load(usize, usize),
+}
+
+/// The equilibrium of the static `scene` and its sensitivities to the parameters
+/// `paths` (see the module docs).
+pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensitivities, Error> {
+    if scene.solver.method != crate::scene::Method::Static {
+        let reason = "sensitivities of dynamic runs are not built yet: use method = \"static\"";
+        return Err(Error::field(
+            "solver.method",
+            format!("{:?}", scene.solver.method),
+            reason,
+        ));
+    }
+    let targets: Vec<Target> = paths
+        .iter()
+        .map(|p| target(scene, p))
+        .collect::<Result<_, _>>()?;
+    // As the run: the grabs, paths, turns and loads at their ends, every cut made.
+    let mut sim = scene.build()?;
+    let mut cuts = crate::run::tally::CutSchedule::new(scene)?;
+    crate::run::state::prepare(scene, &mut sim, &mut cuts)?;
+    sim.settle()?;
+    let system = &sim.system;
+    let mut parameters = Vec::with_capacity(paths.len());
+    let mut rhs = Vec::with_capacity(paths.len());
+    for (path, target) in paths.iter().zip(&targets) {
+        let (value, mut b) = derivative(system, scene, path, target)?;
+        add_barrier_stiffness_derivative(system, scene, target, value, &mut b)?;
+        parameters.push((path.to_string(), value));
+        rhs.push(b);
+    }
+    let mut solver = StaticSolver::new(scene.static_params())?;
+    solver.sensitivities(system, &mut rhs)?;
+    let samples = scene.output.samples;
+    let s: Vec<Real> = (0..samples)
+        .map(|k| k as Real / (samples - 1) as Real)
+        .collect();
+    let rod = &system.rod;
+    let rows = s
+        .iter()
+        .map(|&f| rod.basis_at(scene.material_coordinate(f)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
+        let at = |b: &splinerod_core::BasisValues| {
+            (0..b.order)
+                .map(|k| q[b.first + k] * b.value[k])
+                .sum::<Vector3<Real>>()
+        };
+        rows.iter().map(|b| at(b).into()).collect()
+    };
+    Ok(StaticSensitivities {
+        parameters,
+        positions: rhs.iter().map(|d| point(d)).collect(),
+        at: point(&rod.positions),
+        s,
+        control_points: rhs,
+    })
+}
+
+/// What the parameter `path` names in `scene`, or an error naming it.
+fn target(scene: &Scene, path: &str) -> Result<Target, Error> {
+    let bad = |reason: String| Error::field("params", format!("\"{path}\""), reason);
+    let rod_fields = [
+        "stretch_stiffness",
+        "bending_stiffness",
+        "twist_stiffness",
+        "linear_density",
+    ];
+    let energy = |field: &str, segment: Option<usize>| {
+        let name = rod_fields.iter().find(|f| **f == field);
+        name.map(|n| Target::Energy(n, segment)).ok_or_else(|| {
+            bad(format!(
+                "not a rod parameter with sensitivities ({})",
+                rod_fields.join(", ")
+            ))
+        })
+    };
+    if let Some(field) = path.strip_prefix("rod.") {
+        if !scene.rods.is_empty() {
+            return Err(bad("the scene has [[rods]]: name the rod as rods[k]".into()));
+        }
+        return energy(field, None);
+    }
+    if let Some((k, field)) =
+        indexed(path, "rods[").and_then(|(k, rest)| Some((k, rest.strip_prefix('.')?)))
+    {
+        if k >= scene.rods.len() {
+            return Err(bad(format!(
+                "the scene has {} [[rods]] entries",
+                scene.rods.len()
+            )));
+        }
+        return energy(field, Some(k));
+    }
+    if let Some((c, "")) = indexed(path, "world.gravity[") {
+        return match c {
+            0 => Ok(Target::Energy("gravity[0]", None)),
+            1 => Ok(Target::Energy("gravity[1]", None)),
+            2 => Ok(Target::Energy("gravity[2]", None)),
+            _ => Err(bad("gravity has the components 0, 1, 2".into())),
+        };
+    }
+    if let Some((i, rest)) = indexed(path, "loads[") {
+        if let Some((c, "")) = indexed(rest, ".force[") {
+            if scene.loads.get(i).is_some_and(|l| l.force.is_none()) {
+                return Err(bad("a keyframed load (path) has no one force value".into()));
+            }
+            if i < scene.loads.len() && c < 3 {
+                return Ok(Target::Load(i, c));
+            }
+            return Err(bad(format!(
+                "the scene has {} [[loads]]; a force has 3 components",
+                scene.loads.len()
+            )));
+        }
+    }
+    Err(bad(
+        "not a scalar parameter with sensitivities (rod.<stiffness or linear_density>, \
+         rods[k].…, world.gravity[c], loads[i].force[c])"
+            .into(),
+    ))
+}
+
+/// `(n, rest)` for `path = prefix + "n]" + rest`.
+fn indexed<'a>(path: &'a str, prefix: &str) -> Option<(usize, &'a str)> {
+    let rest = path.strip_prefix(prefix)?;
+    let (n, rest) = rest.split_once(']')?;
+    Some((n.parse().ok()?, rest))
+}
+
+/// The parameter's value and \\(\partial \nabla E / \partial p\\) on `system`.
+fn derivative(
+    system: &RodSystem,
+    scene: &Scene,
+    path: &str,
+    target: &Target,
+) -> Result<(Real, Vec<Vector3<Real>>), Error> {
+    let rod = &system.rod;
+    let mut b = vec![Vector3::zeros(); rod.len()];
+    match *target {
+        Target::Load(i, c) => {
+            let load = &system.loads[i].force;
+            let row = rod.basis_at(load.at)?;
+            for k in 0..row.order {
+                b[row.first + k][c] -= row.value[k];
+            }
+            Ok((load.force[c], b))
+        }
+        Target::Energy(name, segment) => {
+            let mut found = false;
+            for energy in system.acting() {
+                let caps = energy.capabilities();
+                let on = segment.is_none() || caps.segment == segment;
+                if let Some(p) = caps.parameters.filter(|_| on) {
+                    found |= p.add_gradient_derivative(rod, name, &mut b)?;
+                }
+            }
+            if !found {
+                let reason =
+                    "no energy of the scene depends on it (is it set, and is it not a constraint?)";
+                return Err(Error::field("params", format!("\"{path}\""), reason));
+            }
+            Ok((value(scene, name, segment), b))
+        }
+    }
+}
+
+/// The contact barrier's default stiffness follows the loads
+/// (`scene/contact.rs`: \\(\kappa(w)\\), `w` the largest line load, which depends on the
+/// density, gravity, the stiffnesses and the loads), and the barrier is linear in it:
+/// adds \\((\mathrm{d}\kappa/\mathrm{d}p) / \kappa\, \nabla E_{contact}\\). `dκ/dp` is
+/// the central difference of that scalar function of the scene (relative step 1e-6: it
+/// is algebraic in the parameters, so its difference quotient is accurate to ~1e-10);
+/// with an explicit `[contact] stiffness` nothing is added.
+fn add_barrier_stiffness_derivative(
+    system: &RodSystem,
+    scene: &Scene,
+    target: &Target,
+    value: Real,
+    b: &mut [Vector3<Real>],
+) -> Result<(), Error> {
+    let derived = scene
+        .contact
+        .as_ref()
+        .is_some_and(|c| c.enabled && c.stiffness.is_none());
+    let Some(contact) = system
+        .acting()
+        .find(|e| e.name() == "contact")
+        .filter(|_| derived)
+    else {
+        return Ok(());
+    };
+    let kappa = |p: Real| -> Result<Real, Error> {
+        let mut s = scene.clone();
+        set(&mut s, target, p);
+        Ok(s.contact()?.map_or(0.0, |c| c.params().stiffness))
+    };
+    let h = 1e-6 * value.abs().max(1e-6);
+    let here = kappa(value)?;
+    let slope = (kappa(value + h)? - kappa(value - h)?) / (2.0 * h);
+    if slope == 0.0 || here <= 0.0 {
+        return Ok(());
+    }
+    let mut gradient = vec![Vector3::zeros(); system.rod.len()];
+    contact.add_gradient(&system.rod, &mut gradient);
+    for (b, g) in b.iter_mut().zip(&gradient) {
+        *b += g * (slope / here);
+    }
+    Ok(())
+}
+
+/// Sets the parameter `target` of `scene` to `v`.
+fn set(scene: &mut Scene, target: &Target, v: Real) {
+    match *target {
+        Target::Load(i, c) => {
+            if let Some(f) = scene.loads[i].force.as_mut() {
+                f[c] = v;
+            }
+        }
+        Target::Energy(name, segment) => {
+            let rod = match segment {
+                Some(k) => &mut scene.rods[k],
+                None => &mut scene.rod,
+            };
+            match name {
+                "stretch_stiffness" => rod.stretch_stiffness = v,
+                "bending_stiffness" => rod.bending_stiffness = Some(v),
+                "twist_stiffness" => rod.twist_stiffness = Some(v),
+                "linear_density" => rod.linear_density = v,
+                "gravity[0]" => scene.world.gravity[0] = v,
+                "gravity[1]" => scene.world.gravity[1] = v,
+                _ => scene.world.gravity[2] = v,
+            }
+        }
+    }
+}
+
+/// The scene value of the energy parameter `name` (on rod `segment`).
+fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
+    let rod = scene.rod_spec(segment.unwrap_or(0));
+    match name {
+        "stretch_stiffness" => rod.stretch_stiffness,
+        "bending_stiffness" => rod.bending_stiffness.unwrap_or(0.0),
+        "twist_stiffness" => rod.twist_stiffness.unwrap_or(0.0),
+        "linear_density" => rod.linear_density,
+        "gravity[0]" => scene.world.gravity[0],
+        "gravity[1]" => scene.world.gravity[1],
+        _ => scene.world.gravity[2],
+    }
+}
