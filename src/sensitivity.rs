@@ -42,6 +42,44 @@ pub struct StaticSensitivities {
     pub control_points: Vec<Vec<Vector3<Real>>>,
 }
 
+impl StaticSensitivities {
+    /// The JSON of `splinerod sensitivities`: `parameters` (`name`, `value`), `s`,
+    /// `positions` (per parameter name, one `[dx, dy, dz]` per sample) and `at` (the
+    /// samples' equilibrium positions).
+    pub fn json(&self) -> serde_json::Value {
+        let names = self
+            .parameters
+            .iter()
+            .map(|(name, value)| serde_json::json!({ "name": name, "value": value }));
+        let positions: serde_json::Map<String, serde_json::Value> = self
+            .parameters
+            .iter()
+            .zip(&self.positions)
+            .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
+            .collect();
+        serde_json::json!({
+            "parameters": names.collect::<Vec<_>>(),
+            "s": self.s,
+            "positions": positions,
+            "at": self.at,
+        })
+    }
+
+    /// One line per parameter: its value and the largest derivative of a sample.
+    pub fn summary(&self) -> Vec<String> {
+        let largest = |d: &[[Real; 3]]| d.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()));
+        let lines = self.parameters.iter().zip(&self.positions);
+        lines
+            .map(|((name, value), d)| {
+                format!(
+                    "{name} = {value}: samples move by up to {:.3e} m per unit",
+                    largest(d)
+                )
+            })
+            .collect()
+    }
+}
+
 /// What a parameter path names.
 enum Target {
     /// An energy parameter: its name and the segment (`None`: any energy of the rod).

@@ -248,3 +248,48 @@ fn each_rod_of_rods_has_its_own_parameters() {
     let e = static_sensitivities(&scene, &["rod.stretch_stiffness"]).expect_err("rod.");
     assert!(e.to_string().contains("rods[k]"), "{e}");
 }
+
+#[test]
+fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
+    use crate::common::cli::{fresh_dir, ok, refused};
+    let dir = fresh_dir("sensitivities");
+    let json = dir.join("s.json");
+    let json = json.to_str().expect("UTF-8");
+    let params = "--params=rod.bending_stiffness,world.gravity[1]";
+    ok(&[
+        "sensitivities",
+        "scenes/cantilever.toml",
+        params,
+        "--json",
+        json,
+    ]);
+    let value: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).expect("written")).expect("JSON");
+    assert_eq!(value["parameters"][0]["name"], "rod.bending_stiffness");
+    assert_eq!(value["parameters"][0]["value"], 10.0);
+    let samples = value["s"].as_array().expect("s").len();
+    let d = value["positions"]["rod.bending_stiffness"]
+        .as_array()
+        .expect("positions");
+    assert_eq!(d.len(), samples);
+    // The tip of the cantilever: δ = w L⁴ / (8 EI) under its weight, so dy/dEI = δ / EI.
+    let tip = d[samples - 1][1].as_f64().expect("dy");
+    let delta = 0.1 * 9.81 / (8.0 * 10.0);
+    assert!(
+        (tip - delta / 10.0).abs() < 1e-3 * delta / 10.0,
+        "dy/dEI {tip} vs {}",
+        delta / 10.0
+    );
+    let line = refused(&[
+        "sensitivities",
+        "scenes/cantilever.toml",
+        "--params=rod.colour",
+    ]);
+    assert!(line.contains("rod.colour"), "{line}");
+    let line = refused(&[
+        "sensitivities",
+        "scenes/hanging_cable.toml",
+        "--params=rod.stretch_stiffness",
+    ]);
+    assert!(line.contains("solver.method"), "{line}");
+}

@@ -17,6 +17,7 @@
 pub mod adapt;
 pub mod checkpoint;
 pub mod knot;
+mod summary;
 pub mod twist;
 pub mod world;
 

@@ -68,6 +68,20 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Exact sensitivities of a static scene's equilibrium to scalar parameters: the
+    /// derivatives of the output samples' positions (#48).
+    Sensitivities {
+        /// The scene (`method = "static"`).
+        scene: PathBuf,
+        /// Parameters by scene path, comma-separated: rod.stretch_stiffness,
+        /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rods[k].…,
+        /// world.gravity[c], loads[i].force[c].
+        #[arg(long, value_name = "P1,P2,…")]
+        params: String,
+        /// Where to write the sensitivities as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Measures step times, O(n) scaling, ensemble throughput and memory on this machine.
     Bench {
         /// Fewer repetitions and a smaller ensemble (under 15 s).
@@ -201,6 +215,22 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
         }
         Command::Bench { quick, json } => bench(quick, json).map(|()| ExitCode::SUCCESS),
         Command::Merge { out, shards } => merge(&out, &shards).map(|()| ExitCode::SUCCESS),
+        Command::Sensitivities {
+            scene,
+            params,
+            json,
+        } => {
+            let params: Vec<&str> = params.split(',').map(str::trim).collect();
+            let found = splinerod::sensitivity::static_sensitivities(
+                &splinerod::Scene::load(&scene)?,
+                &params,
+            )?;
+            for line in found.summary() {
+                say!("{line}");
+            }
+            json.map_or(Ok(()), |path| write_json(&path, &found.json()))?;
+            Ok(ExitCode::SUCCESS)
+        }
     }
 }
 
@@ -236,72 +266,13 @@ fn write_json(path: &PathBuf, value: &impl serde::Serialize) -> Result<(), Error
 #[cfg(feature = "parallel")]
 fn bench(quick: bool, json: Option<PathBuf>) -> Result<(), Error> {
     let b = splinerod::bench::measure(quick)?;
-    say!(
-        "one implicit Euler step, 16 control points: {:.2} µs ({:.2} µs with the consistent stretching)",
-        b.step_us_16, b.step_us_16_consistent
-    );
-    say!(
-        "one static Newton iteration, 16 control points: {:.2} µs",
-        b.static_newton_us_16
-    );
-    say!(
-        "8 independent 16-point rods in one system: {:.3} × eight single-rod steps",
-        b.world_overhead_8
-    );
-    say!(
-        "knot tying with contact (knot_tying_adaptive.toml, first 0.5 s): {:.0} µs median step",
-        b.knot_step_us
-    );
-    for (n, ns) in &b.per_cp_ns {
-        say!("per control point per step at {n}: {ns:.0} ns");
+    for line in b.summary() {
+        say!("{line}");
     }
-    say!(
-        "flatness (max/min per control point): {:.3}",
-        b.per_cp_flatness
-    );
-    say!(
-        "ensemble of 16-point rods: {:.0} rod-steps/s on 1 thread, {:.0} on {} ({:.0} % efficiency)",
-        b.ensemble_rod_steps_per_s_1,
-        b.ensemble_rod_steps_per_s_all,
-        b.threads,
-        100.0 * b.parallel_efficiency
-    );
-    say!(
-        "  batched four at a time: {:.2} times the {:.0} rod-steps/s of members stepped alone",
-        b.batched_speedup,
-        b.ensemble_rod_steps_per_s_alone_1
-    );
-    say!("memory: {:.0} bytes per control point", b.bytes_per_cp);
-    say!(
-        "checkpoint of the default scene after 100 steps: {:.0} bytes, written in {:.0} µs",
-        b.checkpoint_bytes_16,
-        b.checkpoint_us_16
-    );
-    say!(
-        "stiff catenary (EA = 1e4) settled to {:.2e} m with {} control points in {} steps, {:.3} s",
-        b.stiff_catenary.1,
-        b.stiff_catenary.0,
-        b.stiff_catenary.2,
-        b.stiff_catenary_settle_s
-    );
-    let converged = b
-        .hard_cases_converged
-        .map_or("not run with --quick".into(), |n| {
-            format!("{n} of {}", b.hard_cases_total)
-        });
-    say!(
-        "hard cases converged: {converged}; default scene: {:.3} Newton iterations per step",
-        b.newton_per_step_default
-    );
-    if let Some(path) = json {
-        let text = serde_json::to_string_pretty(&b)?;
-        std::fs::write(&path, text).map_err(|source| Error::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        say!("wrote {}", path.display());
+    match json {
+        Some(path) => write_json(&path, &b),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 #[cfg(not(feature = "parallel"))]
