@@ -24,6 +24,7 @@
 use crate::{Error, RodSystem, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
+use splinerod_core::Rod;
 use splinerod_integrators::StaticSolver;
 
 /// The sensitivities of a static scene's equilibrium.
@@ -40,6 +41,9 @@ pub struct StaticSensitivities {
     /// Per parameter, the derivative of every control point.
     #[serde(skip)]
     pub control_points: Vec<Vec<Vector3<Real>>>,
+    /// The rod at equilibrium.
+    #[serde(skip)]
+    pub rod: Rod,
 }
 
 impl StaticSensitivities {
@@ -142,7 +146,16 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         at: point(&rod.positions),
         s,
         control_points: rhs,
+        rod: rod.clone(),
     })
+}
+
+/// Sets the parameter at scene path `path` (as [`static_sensitivities`] reads it) of
+/// `scene` to `value`.
+pub fn set_parameter(scene: &mut Scene, path: &str, value: Real) -> Result<(), Error> {
+    let target = target(scene, path)?;
+    set(scene, &target, value);
+    Ok(())
 }
 
 /// What the parameter `path` names in `scene`, or an error naming it.

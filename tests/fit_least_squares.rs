@@ -3,6 +3,7 @@
 //! textbook formula, a product of two parameters reported as all the data determine,
 //! bounds kept, too few residuals refused.
 
+use crate::common;
 use splinerod::fit::{fit, Model, ParameterSpace};
 use splinerod::{Error, Real};
 
@@ -54,19 +55,6 @@ const POSITIVE: ParameterSpace = ParameterSpace {
     bounds: None,
 };
 
-/// A deterministic stand-in for Gaussian noise of unit variance (sum of 12 uniforms).
-fn noise(i: usize) -> Real {
-    let mut x = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    let mut sum = 0.0;
-    for _ in 0..12 {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        sum += (x >> 11) as Real / (1u64 << 53) as Real;
-    }
-    sum - 6.0
-}
-
 #[test]
 fn exact_data_are_recovered_in_log_space() {
     let decay = |p: &[Real], t: Real| p[0] * (-p[1] * t).exp();
@@ -101,7 +89,7 @@ fn a_linear_model_has_the_textbook_covariance() {
     let y: Vec<Real> = t
         .iter()
         .enumerate()
-        .map(|(i, &t)| 1.0 + 2.0 * t + sigma * noise(i))
+        .map(|(i, &t)| 1.0 + 2.0 * t + sigma * common::noise(i))
         .collect();
     let line = |p: &[Real], t: Real| p[0] + p[1] * t;
     let mut model = Curve {

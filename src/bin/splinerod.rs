@@ -82,6 +82,20 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Fits scene parameters to observations of a real rod (static scenes, markers).
+    Fit {
+        /// The scene (`method = "static"`), its values the fit's start.
+        scene: PathBuf,
+        /// Observation files (CSV: t,s,x,y,z markers, optional sigma); repeatable.
+        #[arg(long, required = true)]
+        observations: Vec<PathBuf>,
+        /// Parameters by scene path, comma-separated (as for `sensitivities`).
+        #[arg(long, value_name = "P1,P2,…")]
+        params: String,
+        /// Where to write the fit as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Measures step times, O(n) scaling, ensemble throughput and memory on this machine.
     Bench {
         /// Fewer repetitions and a smaller ensemble (under 15 s).
@@ -215,6 +229,17 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
         }
         Command::Bench { quick, json } => bench(quick, json).map(|()| ExitCode::SUCCESS),
         Command::Merge { out, shards } => merge(&out, &shards).map(|()| ExitCode::SUCCESS),
+        Command::Fit {
+            scene,
+            observations,
+            params,
+            json,
+        } => {
+            let fitted = splinerod::fit::command::fit_files(&scene, &observations, &params)?;
+            fitted.summary().iter().for_each(|line| say!("{line}"));
+            json.map_or(Ok(()), |path| write_json(&path, &fitted.json()))?;
+            Ok(ExitCode::SUCCESS)
+        }
         Command::Sensitivities {
             scene,
             params,
@@ -236,20 +261,7 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
 
 /// `splinerod merge`: reads every shard, merges, writes `out`.
 fn merge(out: &PathBuf, shards: &[PathBuf]) -> Result<(), Error> {
-    let mut values = Vec::with_capacity(shards.len());
-    for path in shards {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        let value = serde_json::from_str(&text).map_err(|e| {
-            let reason = format!("not JSON: {e}");
-            Error::field("merge", path.display(), reason)
-        })?;
-        values.push(value);
-    }
-    let merged = splinerod::run::shard::merge(&values)?;
-    write_json(out, &merged)
+    write_json(out, &splinerod::run::shard::merge_files(shards)?)
 }
 
 /// Writes `value` as pretty JSON to `path`.

@@ -148,17 +148,20 @@ pub fn fit(
         .zip(start)
         .map(|(s, &p)| s.variable(p))
         .collect();
-    let problem = Problem {
+    let mut problem = Problem {
         model: RefCell::new(model),
         spaces,
-        x: DVector::from_vec(x),
+        basis: Matrix::identity(n, n),
+        origin: x.clone(),
+        z: DVector::zeros(n),
         cache: RefCell::new(Cache::default()),
     };
+    problem.restrict_to_what_is_seen();
     let patience = max_simulations.div_ceil(n + 1).max(1);
     let (problem, report) = LevenbergMarquardt::new()
         .with_patience(patience)
         .minimize(problem);
-    let x: Vec<Real> = problem.x.iter().copied().collect();
+    let x = problem.variables();
     problem.evaluate(&x);
     let cache = problem.cache.into_inner();
     if let Some(e) = cache.error {
@@ -195,15 +198,73 @@ struct Cache {
 }
 
 /// The model as `levenberg-marquardt` sees it: residuals and Jacobian in the fitted
-/// variables, one simulation per new point.
+/// variables `x = origin + basis · z`, one simulation per new point. The basis spans
+/// the directions the observations see at the start (all of them, but for a model with
+/// parameters they cannot separate): along the others the minimiser would wander
+/// (a density-free cable fit drifted to EA = 1e79 along EA/μ = const), so they stay
+/// where they started.
 struct Problem<'a> {
     model: RefCell<&'a mut dyn Model>,
     spaces: &'a [ParameterSpace],
-    x: DVector<Real>,
+    basis: Matrix<Real>,
+    origin: Vec<Real>,
+    z: DVector<Real>,
     cache: RefCell<Cache>,
 }
 
 impl Problem<'_> {
+    /// The fitted variables at the current `z`.
+    fn variables(&self) -> Vec<Real> {
+        let shift = &self.basis * nalgebra::DVector::from_column_slice(self.z.as_slice());
+        self.origin
+            .iter()
+            .zip(shift.iter())
+            .map(|(o, s)| o + s)
+            .collect()
+    }
+
+    /// `dp/dx` of each parameter at the variables `x`.
+    fn chain(&self, x: &[Real]) -> Vec<Real> {
+        self.spaces
+            .iter()
+            .zip(x)
+            .map(|(s, &x)| s.derivative(x))
+            .collect()
+    }
+
+    /// Sets the basis to the directions the observations see at the origin (singular
+    /// values of the column-scaled Jacobian above [`UNIDENTIFIABLE`] of the largest).
+    fn restrict_to_what_is_seen(&mut self) {
+        let x = self.origin.clone();
+        self.evaluate(&x);
+        let cache = self.cache.borrow();
+        let (n, m) = (x.len(), cache.residuals.len());
+        if cache.error.is_some() {
+            return;
+        }
+        let chain = self.chain(&x);
+        let j = Matrix::from_fn(m, n, |i, k| cache.jacobian_p[i * n + k] * chain[k]);
+        let norms: Vec<Real> = j
+            .column_iter()
+            .map(|c| c.norm().max(Real::MIN_POSITIVE))
+            .collect();
+        let scaled = Matrix::from_fn(m, n, |i, k| j[(i, k)] / norms[k]);
+        let svd = SVD::new(scaled, false, true);
+        let (Some(v_t), largest) = (svd.v_t, svd.singular_values.max()) else {
+            return;
+        };
+        let seen: Vec<usize> = (0..n)
+            .filter(|&k| svd.singular_values[k] > UNIDENTIFIABLE * largest)
+            .collect();
+        if seen.len() == n {
+            return;
+        }
+        let basis = Matrix::from_fn(n, seen.len(), |i, c| v_t[(seen[c], i)] / norms[i]);
+        drop(cache);
+        self.z = DVector::zeros(seen.len());
+        self.basis = basis;
+    }
+
     /// Evaluates the model at variables `x` unless it was the last point evaluated; a
     /// failed simulation leaves non-finite residuals (a step the minimiser rejects).
     fn evaluate(&self, x: &[Real]) {
@@ -238,33 +299,34 @@ impl LeastSquaresProblem<Real, Dyn, Dyn> for Problem<'_> {
     type JacobianStorage = Owned<Real, Dyn, Dyn>;
     type ParameterStorage = Owned<Real, Dyn>;
 
-    fn set_params(&mut self, x: &DVector<Real>) {
-        self.x.copy_from(x);
+    fn set_params(&mut self, z: &DVector<Real>) {
+        self.z.copy_from(z);
     }
 
     fn params(&self) -> DVector<Real> {
-        self.x.clone()
+        self.z.clone()
     }
 
     fn residuals(&self) -> Option<DVector<Real>> {
-        self.evaluate(self.x.as_slice());
+        self.evaluate(&self.variables());
         Some(DVector::from_vec(self.cache.borrow().residuals.clone()))
     }
 
     fn jacobian(&self) -> Option<DMatrix<Real>> {
-        self.evaluate(self.x.as_slice());
+        let x = self.variables();
+        self.evaluate(&x);
         let mut cache = self.cache.borrow_mut();
         cache.jacobians += 1;
-        let n = self.x.len();
+        let (n, r) = (x.len(), self.z.len());
         let m = cache.residuals.len();
-        let chain: Vec<Real> = self
-            .spaces
-            .iter()
-            .zip(self.x.iter())
-            .map(|(s, &x)| s.derivative(x))
-            .collect();
+        let chain = self.chain(&x);
         let j = &cache.jacobian_p;
-        Some(DMatrix::from_fn(m, n, |i, k| j[i * n + k] * chain[k]))
+        let basis = &self.basis;
+        Some(DMatrix::from_fn(m, r, |i, c| {
+            (0..n)
+                .map(|k| j[i * n + k] * chain[k] * basis[(k, c)])
+                .sum()
+        }))
     }
 }
 

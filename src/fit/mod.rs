@@ -2,8 +2,11 @@
 //! observation files ([`observations`]). The least-squares fit driven by the
 //! sensitivities builds on them.
 
+pub mod command;
 pub mod least_squares;
 pub mod observations;
+pub mod scene_fit;
 
 pub use least_squares::{fit, FitReport, Model, ParameterSpace};
 pub use observations::{Observation, ObservationFile, ObservationKind};
+pub use scene_fit::SceneFit;

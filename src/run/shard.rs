@@ -214,3 +214,21 @@ fn same_kernels(shards: &[Value], infos: &[(ShardInfo, usize)]) -> Result<(), Er
 fn shard_error(i: usize, reason: &str) -> Error {
     Error::field("merge", format!("file {}", i + 1), reason)
 }
+
+/// [`merge`] of the shards' JSON files at `paths`; an unreadable file or one that is not
+/// JSON is an error naming it.
+pub fn merge_files(paths: &[std::path::PathBuf]) -> Result<serde_json::Value, Error> {
+    let mut values = Vec::with_capacity(paths.len());
+    for path in paths {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        let value = serde_json::from_str(&text).map_err(|e| {
+            let reason = format!("not JSON: {e}");
+            Error::field("merge", path.display(), reason)
+        })?;
+        values.push(value);
+    }
+    merge(&values)
+}

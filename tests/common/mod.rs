@@ -132,3 +132,17 @@ method = "implicit-euler"
 dt = 0.001
 duration = 0.01
 "#;
+
+/// A deterministic stand-in for Gaussian noise of unit variance: sample `i` (a sum of 12
+/// uniforms from a xorshift seeded by `i`).
+pub fn noise(i: usize) -> splinerod::Real {
+    let mut x = (i as u64 + 7).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut sum = 0.0;
+    for _ in 0..12 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        sum += (x >> 11) as splinerod::Real / (1u64 << 53) as splinerod::Real;
+    }
+    sum - 6.0
+}

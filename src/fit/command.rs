@@ -1,0 +1,95 @@
+//! `splinerod fit SCENE --observations OBS.csv --params P1,P2,… [--json FIT.json]`: reads
+//! the scene and the observation files, fits, and reports — the summary lines the
+//! command prints and the JSON it writes (`parameters` with `name`, `value` and `std`,
+//! `correlation`, `residual_rms`, `iterations`, `simulations`, `converged`, and
+//! `unidentifiable`: the groups of parameters the observations cannot separate, by
+//! name, with the direction in the fitted variables that they do not see).
+
+use crate::fit::{FitReport, ObservationFile, SceneFit};
+use crate::{Error, Scene};
+use std::path::{Path, PathBuf};
+
+/// A fit's report with the parameters' names.
+pub struct NamedFit {
+    /// The parameters' scene paths, in order.
+    pub names: Vec<String>,
+    /// The fit.
+    pub report: FitReport,
+}
+
+/// Fits the parameters `params` (comma-separated scene paths) of the scene at `scene`
+/// to the observation files `observations`.
+pub fn fit_files(scene: &Path, observations: &[PathBuf], params: &str) -> Result<NamedFit, Error> {
+    let scene = Scene::load(scene)?;
+    let files = observations
+        .iter()
+        .map(|p| ObservationFile::read(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let names: Vec<&str> = params.split(',').map(str::trim).collect();
+    let report = SceneFit::new(&scene, &names, &files)?.fit()?;
+    Ok(NamedFit {
+        names: names.iter().map(|s| s.to_string()).collect(),
+        report,
+    })
+}
+
+impl NamedFit {
+    /// What `splinerod fit` prints: each parameter with its deviation, the residual,
+    /// the cost, and a warning per group the observations cannot separate.
+    pub fn summary(&self) -> Vec<String> {
+        let r = &self.report;
+        let mut lines: Vec<String> = self
+            .names
+            .iter()
+            .zip(&r.parameters)
+            .zip(&r.std)
+            .map(|((n, p), s)| format!("{n} = {p:.6e} ± {s:.2e}"))
+            .collect();
+        lines.push(format!(
+            "residual rms {:.3} (in units of σ), {} iterations, {} simulations{}",
+            r.residual_rms,
+            r.iterations,
+            r.simulations,
+            if r.converged { "" } else { ", NOT converged" }
+        ));
+        for (group, direction) in &r.unidentifiable {
+            let names: Vec<&str> = group.iter().map(|&k| self.names[k].as_str()).collect();
+            lines.push(format!(
+                "warning: the observations cannot separate {}: moving them along {direction:.3?} \
+                 (log of positive parameters) changes nothing they see; their values are where \
+                 the fit started along that direction, their deviations infinite",
+                names.join(", ")
+            ));
+        }
+        lines
+    }
+
+    /// The JSON of `splinerod fit` (module docs).
+    pub fn json(&self) -> serde_json::Value {
+        let r = &self.report;
+        let parameters: Vec<serde_json::Value> = self
+            .names
+            .iter()
+            .zip(&r.parameters)
+            .zip(&r.std)
+            .map(|((n, p), s)| serde_json::json!({ "name": n, "value": p, "std": s }))
+            .collect();
+        let groups: Vec<serde_json::Value> = r
+            .unidentifiable
+            .iter()
+            .map(|(group, direction)| {
+                let names: Vec<&str> = group.iter().map(|&k| self.names[k].as_str()).collect();
+                serde_json::json!({ "parameters": names, "direction": direction })
+            })
+            .collect();
+        serde_json::json!({
+            "parameters": parameters,
+            "correlation": r.correlation,
+            "residual_rms": r.residual_rms,
+            "iterations": r.iterations,
+            "simulations": r.simulations,
+            "converged": r.converged,
+            "unidentifiable": groups,
+        })
+    }
+}

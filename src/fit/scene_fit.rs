@@ -1,0 +1,112 @@
+//! A static scene as a [`Model`] for identification: at parameters `p` (by scene path,
+//! [`crate::sensitivity::set_parameter`]), the equilibrium and its sensitivities
+//! ([`crate::sensitivity::static_sensitivities`]) give every marker's residual
+//! \\(r = (x_{obs} - C(s; p))/\sigma\\) and its exact derivative
+//! \\(-\sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p / \sigma\\): one static solve per
+//! evaluation.
+//!
+//! Observed now: markers (`t,s,x,y,z`) of a static scene. Unlabelled points, pin forces
+//! and trajectories need sensitivities not built yet (the distance to the curve's
+//! nearest point, pin forces' derivatives, dynamic runs): such files are refused,
+//! naming them.
+
+use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
+use crate::fit::observations::{ObservationFile, ObservationKind};
+use crate::sensitivity::{set_parameter, static_sensitivities};
+use crate::{Error, Scene};
+use nalgebra::Vector3;
+use splinerod_core::Real;
+
+/// Model evaluations a fit may use, per parameter.
+const SIMULATIONS_PER_PARAMETER: usize = 40;
+
+/// A static scene observed by markers.
+pub struct SceneFit<'a> {
+    scene: Scene,
+    paths: Vec<&'a str>,
+    /// Per marker: material coordinate (m), observed position, σ.
+    markers: Vec<(Real, Vector3<Real>, Real)>,
+}
+
+impl<'a> SceneFit<'a> {
+    /// The fit of the parameters `paths` of the static `scene` to `files`; an error names
+    /// a file that cannot be used yet or does not fit the scene.
+    pub fn new(scene: &Scene, paths: &[&'a str], files: &[ObservationFile]) -> Result<Self, Error> {
+        let length = scene.rod_spec(0).rest_length;
+        let mut markers = Vec::new();
+        for file in files {
+            file.check(scene.pins.len(), length, None)?;
+            if file.kind != ObservationKind::Marker {
+                let reason = "only markers (t,s,x,y,z) can be fitted yet: unlabelled points and pin forces need sensitivities not built";
+                return Err(Error::field("observations", &file.path, reason));
+            }
+            for row in &file.rows {
+                let s = scene.material_coordinate(row.s.unwrap_or(0.0) / length);
+                markers.push((s, Vector3::from(row.value), row.sigma));
+            }
+        }
+        Ok(Self {
+            scene: scene.clone(),
+            paths: paths.to_vec(),
+            markers,
+        })
+    }
+
+    /// Fits from the scene's own values: stiffnesses and densities in log space, the
+    /// other parameters as they are.
+    pub fn fit(&mut self) -> Result<FitReport, Error> {
+        let found = static_sensitivities(&self.scene, &self.paths)?;
+        let start: Vec<Real> = found.parameters.iter().map(|p| p.1).collect();
+        let spaces: Vec<ParameterSpace> = self
+            .paths
+            .iter()
+            .map(|p| ParameterSpace {
+                log: p.ends_with("stiffness") || p.ends_with("linear_density"),
+                bounds: None,
+            })
+            .collect();
+        let budget = SIMULATIONS_PER_PARAMETER * self.paths.len();
+        fit(self, &start, &spaces, budget)
+    }
+}
+
+impl Model for SceneFit<'_> {
+    fn residual_count(&self) -> usize {
+        3 * self.markers.len()
+    }
+
+    fn evaluate(
+        &mut self,
+        p: &[Real],
+        r: &mut [Real],
+        j: Option<&mut [Real]>,
+    ) -> Result<(), Error> {
+        for (path, &v) in self.paths.iter().zip(p) {
+            set_parameter(&mut self.scene, path, v)?;
+        }
+        let found = static_sensitivities(&self.scene, &self.paths)?;
+        let n = p.len();
+        let mut j = j;
+        for (m, (s, observed, sigma)) in self.markers.iter().enumerate() {
+            let row = found.rod.basis_at(*s)?;
+            let at = |q: &[Vector3<Real>]| -> Vector3<Real> {
+                (0..row.order)
+                    .map(|k| q[row.first + k] * row.value[k])
+                    .sum()
+            };
+            let model = at(&found.rod.positions);
+            for c in 0..3 {
+                r[3 * m + c] = (observed[c] - model[c]) / sigma;
+            }
+            if let Some(j) = j.as_deref_mut() {
+                for (k, dq) in found.control_points.iter().enumerate() {
+                    let d = at(dq);
+                    for c in 0..3 {
+                        j[(3 * m + c) * n + k] = -d[c] / sigma;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
