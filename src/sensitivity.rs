@@ -18,13 +18,15 @@
 //! `loads[i].force[c]`. Anything else — an unknown path, a vector without its index, a
 //! parameter no energy of the scene depends on — is an error naming the path.
 //!
-//! Not yet: dynamic runs (forward sensitivities through the integrators' steps), pin
-//! positions, pin forces' derivatives and the command line.
+//! Outputs: the samples' positions and every `[[pins]]` entry's force (the derivative of
+//! the multipliers, from the same solve). Not yet: dynamic runs (forward sensitivities
+//! through the integrators' steps), pin positions as parameters.
 
 use crate::{Error, RodSystem, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
 use splinerod_core::Rod;
+use splinerod_integrators::newton::Tangent;
 use splinerod_integrators::StaticSolver;
 
 /// The sensitivities of a static scene's equilibrium.
@@ -38,6 +40,9 @@ pub struct StaticSensitivities {
     pub positions: Vec<Vec<[Real; 3]>>,
     /// The equilibrium positions of the samples, m.
     pub at: Vec<[Real; 3]>,
+    /// Per parameter, the derivative of each `[[pins]]` entry's force on the rod, N per
+    /// unit (as the run's `pin_forces`).
+    pub pin_forces: Vec<Vec<[Real; 3]>>,
     /// Per parameter, the derivative of every control point.
     #[serde(skip)]
     pub control_points: Vec<Vec<Vector3<Real>>>,
@@ -48,8 +53,9 @@ pub struct StaticSensitivities {
 
 impl StaticSensitivities {
     /// The JSON of `splinerod sensitivities`: `parameters` (`name`, `value`), `s`,
-    /// `positions` (per parameter name, one `[dx, dy, dz]` per sample) and `at` (the
-    /// samples' equilibrium positions).
+    /// `positions` (per parameter name, one `[dx, dy, dz]` per sample), `pin_forces` (per
+    /// parameter name, one per `[[pins]]` entry) and `at` (the samples' equilibrium
+    /// positions).
     pub fn json(&self) -> serde_json::Value {
         let names = self
             .parameters
@@ -61,10 +67,17 @@ impl StaticSensitivities {
             .zip(&self.positions)
             .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
             .collect();
+        let pin_forces: serde_json::Map<String, serde_json::Value> = self
+            .parameters
+            .iter()
+            .zip(&self.pin_forces)
+            .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
+            .collect();
         serde_json::json!({
             "parameters": names.collect::<Vec<_>>(),
             "s": self.s,
             "positions": positions,
+            "pin_forces": pin_forces,
             "at": self.at,
         })
     }
@@ -121,8 +134,22 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         parameters.push((path.to_string(), value));
         rhs.push(b);
     }
+    let pins = system.pins.len();
+    let mut cases: Vec<Tangent> = rhs
+        .into_iter()
+        .map(|b| Tangent {
+            residual_rate: b,
+            target_rates: vec![Vector3::zeros(); pins],
+            ..Tangent::default()
+        })
+        .collect();
     let mut solver = StaticSolver::new(scene.static_params())?;
-    solver.sensitivities(system, &mut rhs)?;
+    solver.sensitivities(system, &mut cases)?;
+    let pin_forces = cases
+        .iter()
+        .map(|c| crate::run::pins::fold_pin_forces(scene, &sim, c.multipliers.clone()))
+        .collect();
+    let rhs: Vec<Vec<Vector3<Real>>> = cases.into_iter().map(|c| c.positions).collect();
     let samples = scene.output.samples;
     let s: Vec<Real> = (0..samples)
         .map(|k| k as Real / (samples - 1) as Real)
@@ -145,6 +172,7 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         positions: rhs.iter().map(|d| point(d)).collect(),
         at: point(&rod.positions),
         s,
+        pin_forces,
         control_points: rhs,
         rod: rod.clone(),
     })

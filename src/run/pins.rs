@@ -10,7 +10,16 @@ use splinerod_core::Real;
 /// system) adds its force to its clamp's (the pair's net force; their moment is the
 /// clamp's bending moment).
 pub(crate) fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
-    let mut forces = sim.integrator.pin_forces();
+    fold_pin_forces(scene, sim, sim.integrator.pin_forces())
+}
+
+/// `forces`, one per pin of the system (or their derivatives), as one per `[[pins]]`
+/// entry ([`scene_pin_forces`]).
+pub(crate) fn fold_pin_forces(
+    scene: &Scene,
+    sim: &Simulation,
+    mut forces: Vec<nalgebra::Vector3<Real>>,
+) -> Vec<[Real; 3]> {
     for (i, j) in clamp_tangents(scene, sim, forces.len()) {
         let extra = forces[i];
         forces[j] += extra;

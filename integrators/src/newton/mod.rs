@@ -19,7 +19,7 @@
 //! ([`crate::lane_euler`]) owns too; [`crate::convergence`] states the rules and why.
 
 mod line_search;
-mod linearized;
+mod tangent;
 
 use crate::convergence::ConvergenceTracker;
 pub use crate::convergence::{DIVERGENCE_LENGTHS, ROUND_OFF_BAND};
@@ -28,9 +28,9 @@ use crate::linear::{LinearSolver, LinearSolverKind};
 use crate::remainder::{RemainderCg, MOTION_FRACTION, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
 use line_search::{line_search, Trial};
-pub(crate) use linearized::solve_linearized;
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
+pub use tangent::{tangents, Tangent};
 
 /// Settings of Newton's method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -198,6 +198,12 @@ impl NewtonWorkspace {
         self.solver.matrix_mut()
     }
 
+    /// Selects the linear solver `kind` for `system`'s rod, as a solve does.
+    pub(crate) fn solver_kind(&mut self, kind: LinearSolverKind, system: &dyn System) {
+        self.solver.kind = kind;
+        self.solver.periodic = system.rod().basis().periodic_count();
+    }
+
     fn resize(&mut self, n: usize, pins: usize) {
         for v in [&mut self.r, &mut self.base, &mut self.dx] {
             v.resize(n, Vector3::zeros());
@@ -218,8 +224,7 @@ pub fn solve(
     ws: &mut NewtonWorkspace,
 ) -> Result<StepStats, IntegratorError> {
     let n = x.len();
-    ws.solver.kind = params.linear_solver;
-    ws.solver.periodic = system.rod().basis().periodic_count();
+    ws.solver_kind(params.linear_solver, system);
     ws.resize(n, system.pins().len());
     ws.constraints.setup(system.rod(), system.pins())?;
     for (p, pin) in system.pins().iter().enumerate() {
@@ -284,14 +289,28 @@ fn newton_direction(
     stats: &mut StepStats,
 ) -> Result<Real, IntegratorError> {
     let analyses = ws.solver.analyses();
-    let rho = loop {
-        let rho = factor_matrix(problem, system, ws, std::mem::take(&mut assembled))?;
+    loop {
+        factor_matrix(problem, system, ws, std::mem::take(&mut assembled))?;
         match ws.constraints.factor(&mut ws.solver) {
             Err(_) if ws.solver.is_indefinite() && problem.on_not_positive_definite() => {}
-            result => break result.map(|_| rho)?,
+            result => break result?,
         }
-    };
+    }
     stats.symbolic_analyses += ws.solver.analyses() - analyses;
+    solve_factored(problem, system, x, ws, stats)
+}
+
+/// With `A` and the pins factorised, solves the KKT system for the residual `ws.r` and
+/// the pins' targets into `ws.dx` and the multipliers (with the remainder's correction);
+/// returns the slope as [`newton_direction`] does.
+fn solve_factored(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    x: &[Vector3<Real>],
+    ws: &mut NewtonWorkspace,
+    stats: &mut StepStats,
+) -> Result<Real, IntegratorError> {
+    let rho = problem.augmentation();
     ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
     ws.constraints.add_gram_rhs(rho, x, &mut ws.base);
     for (i, (r, aug)) in ws.r.iter().zip(&ws.base).enumerate() {

@@ -37,7 +37,7 @@ mod problem;
 
 use crate::incremental::{Increment, Stepper};
 use crate::linear::LinearSolverKind;
-use crate::newton::{self, NewtonParams, NewtonWorkspace};
+use crate::newton::{self, NewtonParams, NewtonWorkspace, Tangent};
 use crate::{Integrator, IntegratorError, Role, StepStats, System};
 use nalgebra::Vector3;
 use problem::{add_counts, newton_params, shortest_period, StaticProblem};
@@ -329,30 +329,29 @@ impl StaticSolver {
         self.workspace.multipliers()
     }
 
-    /// Sensitivities of the equilibrium the system is at (after [`Self::solve`]): for
-    /// each `rhs[k]`, the derivative \(b_k = \partial \nabla E / \partial p_k\) of the
-    /// potential's gradient by a parameter on entry, the derivative of the control
-    /// points \(\mathrm{d}q/\mathrm{d}p_k\) on return, from \(K\, \dot q = -b_k\) with
-    /// the exact Hessian `K` and the pins held (`newton/linearized.rs`). An error if the
-    /// exact Hessian cannot be factorised (the equilibrium is singular there).
+    /// Sensitivities of the equilibrium the system is at (after a converged
+    /// [`StaticSolver::solve`]): solves each [`Tangent`] problem,
+    /// \\(K\dot x - G^T\dot\mu = -\partial r/\partial p\\), \\(G\dot x = \dot c\\), with one
+    /// factorisation of the exact Hessian `K` by this solver's linear solver (never the
+    /// definite stand-in: an error instead), so that \\(\dot\mu\\) is the derivative of
+    /// [`StaticSolver::pin_forces`]. The pins' forces the last solve found are kept.
     pub fn sensitivities(
         &mut self,
         system: &dyn System,
-        rhs: &mut [Vec<Vector3<Real>>],
-    ) -> Result<(), IntegratorError> {
-        let mut exact = StaticProblem {
+        cases: &mut [Tangent],
+    ) -> Result<StepStats, IntegratorError> {
+        let mut problem = StaticProblem {
             regularization: 0.0,
             kind: HessianKind::Exact,
             rho: 0.0,
         };
-        let (ws, kind) = (&mut self.workspace, self.params.linear_solver);
-        newton::solve_linearized(&mut exact, system, ws, kind, rhs)?;
-        if exact.kind != HessianKind::Exact {
-            return Err(IntegratorError::NotPositiveDefinite {
-                context: "the equilibrium's exact Hessian (sensitivities)",
-            });
-        }
-        Ok(())
+        let forces = self.workspace.multipliers().to_vec();
+        self.workspace
+            .solver_kind(self.params.linear_solver, system);
+        let exact = |p: &dyn newton::NewtonProblem| p.indefinite_allowed();
+        let stats = newton::tangents(&mut problem, system, &mut self.workspace, &exact, cases);
+        self.workspace.set_multipliers(forces.into_iter());
+        stats
     }
 
     /// [`StaticSolver::solve`], repeated with updated multipliers

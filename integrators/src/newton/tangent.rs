@@ -1,0 +1,74 @@
+//! Tangent (sensitivity) solves at a converged point with the Newton machinery's own
+//! factorisation: for a parameter `p` of an equilibrium \\(r(x(p), p) = G^T\mu\\),
+//! \\(G x = c(p)\\), the implicit-function theorem gives the linear KKT system
+//!
+//! \\[ K\,\dot x - G^T \dot\mu = -\partial r/\partial p, \qquad G \dot x = \dot c, \\]
+//!
+//! with `K` the exact Hessian. It is the Newton step's system with the residual
+//! replaced by \\(\partial r/\partial p\\), the pins' gaps by \\(\dot c\\) and the iterate by
+//! zero, so one factorisation (by the solver the Newton iterations use: banded, sparse
+//! or periodic; the pins' Schur complement; the remainder's correction by conjugate
+//! gradients to relative 1e-9) serves every parameter.
+
+use super::{factor_matrix, solve_factored, NewtonProblem, NewtonWorkspace};
+use crate::{IntegratorError, StepStats, System};
+use nalgebra::Vector3;
+use splinerod_core::Real;
+
+/// One parameter's tangent problem and, after [`tangents`], its solution.
+#[derive(Debug, Clone, Default)]
+pub struct Tangent {
+    /// \\(\partial r/\partial p\\): the derivative of the residual (the potential's
+    /// gradient) with respect to the parameter, one entry per control point.
+    pub residual_rate: Vec<Vector3<Real>>,
+    /// \\(\dot c\\): the derivative of each pin's target (zero unless the parameter moves it).
+    pub target_rates: Vec<Vector3<Real>>,
+    /// \\(\dot x\\), the control points' derivative (the solution).
+    pub positions: Vec<Vector3<Real>>,
+    /// \\(\dot\mu\\), the derivative of the pins' multipliers (their forces, for statics).
+    pub multipliers: Vec<Vector3<Real>>,
+}
+
+/// Factorises `problem`'s matrix at the applied state once (it must be the exact
+/// Hessian: `exact` tells whether the problem still assembles it after the
+/// factorisation, which may have switched it to a definite fallback — then an error,
+/// not an approximate answer) and solves every
+/// tangent problem with it. Returns the counters of the factorisation and solves.
+pub fn tangents(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    exact: &dyn Fn(&dyn NewtonProblem) -> bool,
+    cases: &mut [Tangent],
+) -> Result<StepStats, IntegratorError> {
+    let n = system.rod().len();
+    ws.resize(n, system.pins().len());
+    ws.constraints.setup(system.rod(), system.pins())?;
+    let mut stats = StepStats::default();
+    factor_matrix(problem, system, ws, false)?;
+    ws.constraints.factor(&mut ws.solver)?;
+    if !exact(problem) {
+        return Err(IntegratorError::NotPositiveDefinite {
+            context: "the exact Hessian at the equilibrium, for sensitivities",
+        });
+    }
+    let zeros = vec![Vector3::zeros(); n];
+    for case in cases.iter_mut() {
+        let pins = system.pins().len();
+        if case.residual_rate.len() != n || case.target_rates.len() != pins {
+            return Err(IntegratorError::InvalidParameter {
+                name: "tangent problem size",
+                value: case.residual_rate.len() as Real,
+                reason: "one residual rate per control point and one target rate per pin",
+            });
+        }
+        ws.r.copy_from_slice(&case.residual_rate);
+        ws.constraints.targets.clone_from(&case.target_rates);
+        ws.floor = 0.0;
+        ws.motion = None;
+        solve_factored(problem, system, &zeros, ws, &mut stats)?;
+        case.positions.clone_from(&ws.dx);
+        case.multipliers.clone_from(&ws.multipliers);
+    }
+    Ok(stats)
+}
