@@ -43,6 +43,8 @@ pub struct StaticSensitivities {
     /// Per parameter, the derivative of each `[[pins]]` entry's force on the rod, N per
     /// unit (as the run's `pin_forces`).
     pub pin_forces: Vec<Vec<[Real; 3]>>,
+    /// Each `[[pins]]` entry's force on the rod at equilibrium, N.
+    pub forces: Vec<[Real; 3]>,
     /// Per parameter, the derivative of every control point.
     #[serde(skip)]
     pub control_points: Vec<Vec<Vector3<Real>>>,
@@ -173,6 +175,7 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         at: point(&rod.positions),
         s,
         pin_forces,
+        forces: crate::run::pins::scene_pin_forces(scene, &sim),
         control_points: rhs,
         rod: rod.clone(),
     })

@@ -168,3 +168,52 @@ fn the_command_line_fits_and_names_what_it_cannot_use() {
     let line = refused(&["fit", scene, "--observations", obs, "--params=rod.radius"]);
     assert!(line.contains("rod.radius"), "{line}");
 }
+
+#[test]
+fn the_measured_clamp_force_separates_the_density() {
+    // The clamp's force (the cable's weight, and the sag's pull) measured to 0.1 mN fixes
+    // μ; with the 40 markers the fit then recovers all three.
+    let truth = splinerod::run(&cable(50.0, 1e-3))
+        .expect("truth")
+        .pin_forces[0];
+    let mut csv = String::from("t,pin,fx,fy,fz,sigma\n");
+    let n = |c: usize| 1e-4 * common::noise(500 + c);
+    csv += &format!(
+        ",0,{},{},{},1e-4\n",
+        truth[0] + n(0),
+        truth[1] + n(1),
+        truth[2] + n(2)
+    );
+    let forces = ObservationFile::parse("forces.csv", &csv).expect("forces");
+    let files = [markers(), forces];
+    let mut start = cable(80.0, 2e-3);
+    start.rod.linear_density = 0.15;
+    let params = [
+        "rod.stretch_stiffness",
+        "rod.bending_stiffness",
+        "rod.linear_density",
+    ];
+    let report = SceneFit::new(&start, &params, &files)
+        .expect("fit")
+        .fit()
+        .expect("fitted");
+    println!("{report:?}");
+    assert!(
+        report.unidentifiable.is_empty(),
+        "{:?}",
+        report.unidentifiable
+    );
+    for (k, truth) in [50.0, 1e-3, 0.1].into_iter().enumerate() {
+        let (p, s) = (report.parameters[k], report.std[k]);
+        assert!(
+            (p / truth - 1.0).abs() < 0.02,
+            "{}: {p} vs {truth}",
+            params[k]
+        );
+        assert!(
+            (p - truth).abs() < 3.0 * s,
+            "{}: {p} vs {truth} ± {s}",
+            params[k]
+        );
+    }
+}

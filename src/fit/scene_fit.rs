@@ -5,9 +5,11 @@
 //! \\(-\sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p / \sigma\\): one static solve per
 //! evaluation.
 //!
-//! Observed now: markers (`t,s,x,y,z`) of a static scene. Unlabelled points, pin forces
-//! and trajectories need sensitivities not built yet (the distance to the curve's
-//! nearest point, pin forces' derivatives, dynamic runs): such files are refused,
+//! Observed now, in a static scene: markers (`t,s,x,y,z`) and pin forces
+//! (`t,pin,fx,fy,fz`: the force `[[pins]]` entry `pin` exerts on the rod, as the run's
+//! `pin_forces`; residual \\((F_{obs} - F(p))/\sigma\\) with the multipliers'
+//! derivative). Unlabelled points and trajectories need what is not built yet (the
+//! distance to the curve's nearest point, dynamic sensitivities): such files are refused,
 //! naming them.
 
 use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
@@ -26,6 +28,8 @@ pub struct SceneFit<'a> {
     paths: Vec<&'a str>,
     /// Per marker: material coordinate (m), observed position, σ.
     markers: Vec<(Real, Vector3<Real>, Real)>,
+    /// Per measured pin force: the `[[pins]]` entry, the force, σ.
+    forces: Vec<(usize, Vector3<Real>, Real)>,
 }
 
 impl<'a> SceneFit<'a> {
@@ -33,22 +37,31 @@ impl<'a> SceneFit<'a> {
     /// a file that cannot be used yet or does not fit the scene.
     pub fn new(scene: &Scene, paths: &[&'a str], files: &[ObservationFile]) -> Result<Self, Error> {
         let length = scene.rod_spec(0).rest_length;
-        let mut markers = Vec::new();
+        let (mut markers, mut forces) = (Vec::new(), Vec::new());
         for file in files {
             file.check(scene.pins.len(), length, None)?;
-            if file.kind != ObservationKind::Marker {
-                let reason = "only markers (t,s,x,y,z) can be fitted yet: unlabelled points and pin forces need sensitivities not built";
-                return Err(Error::field("observations", &file.path, reason));
-            }
             for row in &file.rows {
-                let s = scene.material_coordinate(row.s.unwrap_or(0.0) / length);
-                markers.push((s, Vector3::from(row.value), row.sigma));
+                let value = Vector3::from(row.value);
+                match (file.kind, row.s, row.pin) {
+                    (ObservationKind::Marker, Some(s), _) => {
+                        let s = scene.material_coordinate(s / length);
+                        markers.push((s, value, row.sigma));
+                    }
+                    (ObservationKind::PinForce, _, Some(pin)) => {
+                        forces.push((pin, value, row.sigma))
+                    }
+                    _ => {
+                        let reason = "only markers (t,s,x,y,z) and pin forces (t,pin,fx,fy,fz) can be fitted yet: unlabelled points need the distance to the curve's nearest point";
+                        return Err(Error::field("observations", &file.path, reason));
+                    }
+                }
             }
         }
         Ok(Self {
             scene: scene.clone(),
             paths: paths.to_vec(),
             markers,
+            forces,
         })
     }
 
@@ -72,7 +85,7 @@ impl<'a> SceneFit<'a> {
 
 impl Model for SceneFit<'_> {
     fn residual_count(&self) -> usize {
-        3 * self.markers.len()
+        3 * (self.markers.len() + self.forces.len())
     }
 
     fn evaluate(
@@ -103,6 +116,20 @@ impl Model for SceneFit<'_> {
                     let d = at(dq);
                     for c in 0..3 {
                         j[(3 * m + c) * n + k] = -d[c] / sigma;
+                    }
+                }
+            }
+        }
+        let first = self.markers.len();
+        for (f, (pin, observed, sigma)) in self.forces.iter().enumerate() {
+            let model = found.forces[*pin];
+            for c in 0..3 {
+                r[3 * (first + f) + c] = (observed[c] - model[c]) / sigma;
+            }
+            if let Some(j) = j.as_deref_mut() {
+                for (k, d) in found.pin_forces.iter().enumerate() {
+                    for c in 0..3 {
+                        j[(3 * (first + f) + c) * n + k] = -d[*pin][c] / sigma;
                     }
                 }
             }
