@@ -82,13 +82,11 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Fits scene parameters to observations of a real rod (static scenes: markers, pin
-    /// forces).
+    /// Fits scene parameters to observed markers and pin forces (static scenes).
     Fit {
         /// The scene (`method = "static"`), its values the fit's start.
         scene: PathBuf,
-        /// Observation files (CSV: t,s,x,y,z markers or t,pin,fx,fy,fz pin forces, optional
-        /// sigma); repeatable.
+        /// Observation files (CSV t,s,x,y,z or t,pin,fx,fy,fz; optional sigma); repeatable.
         #[arg(long, required = true)]
         observations: Vec<PathBuf>,
         /// Parameters by scene path, comma-separated (as for `sensitivities`).
