@@ -113,7 +113,8 @@ fn on_a_slope(mu: Real, rod: &str, obstacle: &str) -> (Real, Vec<[Real; 3]>) {
 /// coefficient (default `[contact] friction`) and a contact takes the smaller of its two
 /// surfaces': on the 10° slope (tan 10° = 0.176) μ = 0.3 holds the rod, an obstacle or
 /// a rod of μ = 0.1 lets it slide whatever `[contact]` says, and the coefficients given
-/// per surface act exactly (bit for bit) as the same coefficient given once.
+/// per surface act exactly (bit for bit, the two runs under one kernel set, either) as
+/// the same coefficient given once.
 #[test]
 fn each_surface_has_its_own_friction_and_a_contact_takes_the_smaller() {
     let own = |mu: Real| format!("friction = {mu}");

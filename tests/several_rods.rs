@@ -243,6 +243,7 @@ fn probes_follow_the_rod_they_name() {
 /// #49 item 5: each rod's surface may have its own friction coefficient, and a contact
 /// between two rods takes the smaller: the crossing ropes with coefficients 0.9 (lower)
 /// and 0.5 (upper, whose free ends also touch each other) of their own move bit for bit
+/// (the runs compared under one kernel set, either)
 /// as with `[contact] friction = 0.5` for all; with 0.2 on one rope they move otherwise.
 #[test]
 fn a_contact_between_rods_takes_the_smaller_friction() {
