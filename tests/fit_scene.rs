@@ -210,3 +210,60 @@ fn the_measured_clamp_force_separates_the_density() {
     );
     recovered(&report, &params, &[50.0, 1e-3, 0.1]);
 }
+
+#[test]
+fn the_fit_needs_ten_times_fewer_simulations_than_nelder_mead() {
+    // The same objective from the same start: simulations until the residuals' root mean
+    // square first comes within 1e-6 of the least-squares optimum's, for the fit (from
+    // its history) and for Nelder–Mead (argmin's, stopped there).
+    let files = [markers()];
+    let params = ["rod.stretch_stiffness", "rod.bending_stiffness"];
+    let mut fit = SceneFit::new(&cable(80.0, 2e-3), &params, &files).expect("fit");
+    let report = fit.fit().expect("fitted");
+    let target = report.residual_rms * (1.0 + 1e-6);
+    let fitted = report
+        .simulations_to(target)
+        .expect("the fit reaches its optimum");
+    let simplex = fit.nelder_mead(target, 2_000).expect("simplex");
+    println!(
+        "to rms {target:.9}: least squares {fitted} simulations ({} in all), Nelder–Mead {} \
+         (EA {:.4}, EI {:.6e})",
+        report.simulations, simplex.simulations, simplex.parameters[0], simplex.parameters[1]
+    );
+    assert!(simplex.reached, "{simplex:?}");
+    assert!(
+        simplex.simulations >= 10 * fitted,
+        "{} against {fitted}",
+        simplex.simulations
+    );
+}
+
+#[test]
+fn synthetic_observations_are_reproducible_and_check_their_noise() {
+    use splinerod::fit::synthetic::{noisy_markers, noisy_pin_force};
+    let truth = cable(50.0, 1e-3);
+    let a = noisy_markers(&truth, 10, 1e-4, 3).expect("markers");
+    let b = noisy_markers(&truth, 10, 1e-4, 3).expect("markers");
+    assert_eq!(a, b, "one seed, one data set");
+    let c = noisy_markers(&truth, 10, 1e-4, 4).expect("markers");
+    assert_ne!(a, c);
+    // The noise is what was asked for: the markers' distance to the clean curve.
+    let clean = splinerod::sensitivity::static_sensitivities(&truth, &[]).expect("truth");
+    let many = noisy_markers(&truth, 400, 1e-3, 5).expect("markers");
+    let deviations: Vec<Real> = many
+        .rows
+        .iter()
+        .flat_map(|r| {
+            let p = clean.rod.point(r.s.unwrap()).unwrap();
+            (0..3).map(move |c| r.value[c] - p[c])
+        })
+        .collect();
+    let rms = (deviations.iter().map(|d| d * d).sum::<Real>() / deviations.len() as Real).sqrt();
+    assert!((rms / 1e-3 - 1.0).abs() < 0.1, "noise rms {rms}");
+    for sigma in [0.0, -1.0, Real::NAN] {
+        let e = noisy_markers(&truth, 10, sigma, 1).expect_err("refused");
+        assert!(e.to_string().contains("sigma"), "{e}");
+    }
+    let e = noisy_pin_force(&truth, 3, 1e-4, 1).expect_err("no pin 3");
+    assert!(e.to_string().contains("pin"), "{e}");
+}

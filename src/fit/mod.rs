@@ -3,10 +3,13 @@
 //! sensitivities builds on them.
 
 pub mod command;
+pub mod gradient_free;
 pub mod least_squares;
 pub mod observations;
 pub mod scene_fit;
+pub mod synthetic;
 
+pub use gradient_free::{nelder_mead, GradientFreeFit};
 pub use least_squares::{fit, FitReport, Model, ParameterSpace};
 pub use observations::{Observation, ObservationFile, ObservationKind};
 pub use scene_fit::SceneFit;

@@ -12,6 +12,7 @@
 //! distance to the curve's nearest point, dynamic sensitivities): such files are refused,
 //! naming them.
 
+use crate::fit::gradient_free::{nelder_mead, GradientFreeFit};
 use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
 use crate::fit::observations::{ObservationFile, ObservationKind};
 use crate::sensitivity::{set_parameter, static_sensitivities};
@@ -24,6 +25,9 @@ const SIMULATIONS_PER_PARAMETER: usize = 40;
 
 /// A static scene observed by markers.
 pub struct SceneFit<'a> {
+    /// The scene as given: every fit starts from its values.
+    origin: Scene,
+    /// The scene at the parameters of the latest evaluation.
     scene: Scene,
     paths: Vec<&'a str>,
     /// Per marker: material coordinate (m), observed position, σ.
@@ -58,6 +62,7 @@ impl<'a> SceneFit<'a> {
             }
         }
         Ok(Self {
+            origin: scene.clone(),
             scene: scene.clone(),
             paths: paths.to_vec(),
             markers,
@@ -68,9 +73,28 @@ impl<'a> SceneFit<'a> {
     /// Fits from the scene's own values: stiffnesses and densities in log space, the
     /// other parameters as they are.
     pub fn fit(&mut self) -> Result<FitReport, Error> {
-        let found = static_sensitivities(&self.scene, &self.paths)?;
-        let start: Vec<Real> = found.parameters.iter().map(|p| p.1).collect();
-        let spaces: Vec<ParameterSpace> = self
+        let (start, spaces) = self.start()?;
+        let budget = SIMULATIONS_PER_PARAMETER * self.paths.len();
+        fit(self, &start, &spaces, budget)
+    }
+
+    /// The gradient-free baseline ([`crate::fit::gradient_free`]) from the same start
+    /// in the same variables as [`Self::fit`], until the residuals' root mean square is
+    /// at most `target_rms` or `max_simulations` are spent.
+    pub fn nelder_mead(
+        &mut self,
+        target_rms: Real,
+        max_simulations: usize,
+    ) -> Result<GradientFreeFit, Error> {
+        let (start, spaces) = self.start()?;
+        nelder_mead(self, &start, &spaces, target_rms, max_simulations)
+    }
+
+    /// The scene's values of the fitted parameters, and how each is fitted.
+    fn start(&self) -> Result<(Vec<Real>, Vec<ParameterSpace>), Error> {
+        let found = static_sensitivities(&self.origin, &self.paths)?;
+        let start = found.parameters.iter().map(|p| p.1).collect();
+        let spaces = self
             .paths
             .iter()
             .map(|p| ParameterSpace {
@@ -78,8 +102,7 @@ impl<'a> SceneFit<'a> {
                 bounds: None,
             })
             .collect();
-        let budget = SIMULATIONS_PER_PARAMETER * self.paths.len();
-        fit(self, &start, &spaces, budget)
+        Ok((start, spaces))
     }
 }
 

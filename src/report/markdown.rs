@@ -29,6 +29,7 @@ pub fn markdown(r: &Report, quick: bool) -> String {
     crate::report::adaptive::markdown(&mut out, &r.adaptive);
     crate::report::crossing::markdown(&mut out, &r.crossing);
     crate::report::capstan::markdown(&mut out, &r.capstan, quick);
+    crate::report::calibration::markdown(&mut out, &r.calibration);
     out
 }
 

@@ -19,6 +19,8 @@
 //!   ([`crate::report::adaptive`]); on two contact problems, the crossing ropes' lift
 //!   ([`crate::report::crossing`]) and the capstan's slip threshold
 //!   ([`crate::report::capstan`]).
+//! * Calibration: parameters recovered from noisy observations of a clamped cable, and
+//!   the fit's simulations against Nelder–Mead's ([`crate::report::calibration`]).
 //!
 //! The catenary and string sweeps use the default (mixed) stretching; the static
 //! catenary is also swept with the pointwise form, whose Galerkin order on this stretchy
@@ -26,6 +28,7 @@
 
 pub mod adaptive;
 pub mod adaptive_study;
+pub mod calibration;
 pub mod capstan;
 pub mod crossing;
 mod markdown;
@@ -95,6 +98,8 @@ pub struct Report {
     pub crossing: crate::report::crossing::CrossingSweep,
     /// The capstan's slip threshold per resolution (none with `quick`).
     pub capstan: Vec<crate::report::capstan::CapstanRow>,
+    /// The calibration study: fits of a clamped cable over noise levels.
+    pub calibration: Vec<crate::report::calibration::CalibrationRow>,
 }
 
 fn sizes(
@@ -170,6 +175,7 @@ pub fn measure(quick: bool) -> Result<Report, Error> {
     report.adaptive = crate::report::adaptive::measure(quick)?;
     report.crossing = crate::report::crossing::measure(quick)?;
     report.capstan = crate::report::capstan::measure(quick)?;
+    report.calibration = crate::report::calibration::measure(quick)?;
     Ok(report)
 }
 

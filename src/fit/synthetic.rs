@@ -1,0 +1,87 @@
+//! Synthetic observations of a scene with known parameters, for studies of the fit
+//! (the report's calibration section) and for users checking a calibration set-up
+//! before they measure: the static equilibrium of the true scene observed by markers
+//! and pin forces with Gaussian noise of a given σ, from a seeded ChaCha8 generator (the same
+//! seed, the same data).
+
+use crate::fit::observations::{Observation, ObservationFile, ObservationKind};
+use crate::sensitivity::{static_sensitivities, StaticSensitivities};
+use crate::{Error, Scene};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use splinerod_core::Real;
+
+/// `count` markers spread evenly over the static `truth`'s first rod (at `s = k L /
+/// count`, `k = 1 ..= count`), each coordinate with Gaussian noise of standard deviation
+/// `sigma` (m, > 0), from the generator seeded with `seed`.
+pub fn noisy_markers(
+    truth: &Scene,
+    count: usize,
+    sigma: Real,
+    seed: u64,
+) -> Result<ObservationFile, Error> {
+    let (found, noise, mut rng) = equilibrium_and_noise(truth, sigma, seed)?;
+    let length = truth.rod_spec(0).rest_length;
+    let rows = (1..=count)
+        .map(|k| {
+            let s = k as Real * length / count as Real;
+            let p = found.rod.point(truth.material_coordinate(s / length))?;
+            Ok(Observation {
+                t: None,
+                s: Some(s),
+                pin: None,
+                value: std::array::from_fn(|c| p[c] + noise.sample(&mut rng)),
+                sigma,
+                line: k + 1,
+            })
+        })
+        .collect::<Result<_, Error>>()?;
+    Ok(ObservationFile {
+        path: format!("synthetic markers (σ = {sigma} m, seed {seed})"),
+        kind: ObservationKind::Marker,
+        rows,
+    })
+}
+
+/// The force of `[[pins]]` entry `pin` of the static `truth` on its rod, each component
+/// with Gaussian noise of standard deviation `sigma` (N, > 0), seeded with `seed`.
+pub fn noisy_pin_force(
+    truth: &Scene,
+    pin: usize,
+    sigma: Real,
+    seed: u64,
+) -> Result<ObservationFile, Error> {
+    let (found, noise, mut rng) = equilibrium_and_noise(truth, sigma, seed)?;
+    let Some(force) = found.forces.get(pin) else {
+        let reason = format!("the scene has {} pins", found.forces.len());
+        return Err(Error::field("pin", pin, reason));
+    };
+    Ok(ObservationFile {
+        path: format!("synthetic force of pin {pin} (σ = {sigma} N, seed {seed})"),
+        kind: ObservationKind::PinForce,
+        rows: vec![Observation {
+            t: None,
+            s: None,
+            pin: Some(pin),
+            value: std::array::from_fn(|c| force[c] + noise.sample(&mut rng)),
+            sigma,
+            line: 2,
+        }],
+    })
+}
+
+/// The static equilibrium of `truth`, the centred normal distribution of standard
+/// deviation `sigma` (checked finite and positive) and the generator seeded with `seed`.
+fn equilibrium_and_noise(
+    truth: &Scene,
+    sigma: Real,
+    seed: u64,
+) -> Result<(StaticSensitivities, Normal<Real>, ChaCha8Rng), Error> {
+    if !(sigma.is_finite() && sigma > 0.0) {
+        return Err(Error::field("sigma", sigma, "must be finite and positive"));
+    }
+    let noise = Normal::new(0.0, sigma).map_err(|e| Error::field("sigma", sigma, e.to_string()))?;
+    let found = static_sensitivities(truth, &[])?;
+    Ok((found, noise, ChaCha8Rng::seed_from_u64(seed)))
+}
