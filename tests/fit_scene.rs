@@ -115,7 +115,7 @@ fn the_command_line_fits_and_names_what_it_cannot_use() {
     use crate::common::cli::{fresh_dir, ok, refused};
     let dir = fresh_dir("fit");
     let scene = dir.join("cable.toml");
-    let text = cable_text(80.0, 2e-3);
+    let text = format!("# the bench cable\n{}", cable_text(80.0, 2e-3));
     std::fs::write(&scene, text).expect("scene");
     let obs = dir.join("markers.csv");
     let m = markers();
@@ -138,11 +138,33 @@ fn the_command_line_fits_and_names_what_it_cannot_use() {
         json.to_str().unwrap(),
     );
     let params = "--params=rod.stretch_stiffness,rod.bending_stiffness";
-    ok(&["fit", scene, "--observations", obs, params, "--json", json]);
+    let fitted = dir.join("fitted.toml");
+    let out = fitted.to_str().unwrap();
+    ok(&[
+        "fit",
+        scene,
+        "--observations",
+        obs,
+        params,
+        "--json",
+        json,
+        "--scene-out",
+        out,
+    ]);
     let value: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
     let ea = value["parameters"][0]["value"].as_f64().expect("EA");
     assert!((ea / 50.0 - 1.0).abs() < 0.02, "EA {ea}");
+    // The fitted scene: the user's file, comment kept, the fitted values exactly.
+    let written = std::fs::read_to_string(&fitted).expect("fitted scene");
+    assert!(written.starts_with("# the bench cable\n"), "{written}");
+    let fitted = Scene::from_toml(&written).expect("a scene");
+    assert_eq!(fitted.rod.stretch_stiffness.to_bits(), ea.to_bits());
+    let ei = value["parameters"][1]["value"].as_f64().expect("EI");
+    assert_eq!(
+        fitted.rod.bending_stiffness.map(Real::to_bits),
+        Some(ei.to_bits())
+    );
     assert_eq!(value["parameters"][1]["name"], "rod.bending_stiffness");
     assert!(value["converged"].as_bool().expect("converged"));
     assert!(value["simulations"].as_u64().expect("simulations") <= 40);
@@ -266,4 +288,39 @@ fn synthetic_observations_are_reproducible_and_check_their_noise() {
     }
     let e = noisy_pin_force(&truth, 3, 1e-4, 1).expect_err("no pin 3");
     assert!(e.to_string().contains("pin"), "{e}");
+}
+
+#[test]
+fn fitted_values_are_written_into_the_scene_file_in_place() {
+    use splinerod::fit::scene_out::with_fitted_values;
+    let text = "[[rods]] # upper\nname = \"a\"\nrest_length = 1.0\nlinear_density = 0.1\nstretch_stiffness = 10.0 # guessed\n\
+                control_points = 8\nstart = [0.0, 0.0, 0.0]\nend = [1.0, 0.0, 0.0]\n\n\
+                [[rods]]\nname = \"b\"\nrest_length = 1.0\nlinear_density = 0.1\nstretch_stiffness = 20.0\n\
+                control_points = 8\nstart = [0.0, 1.0, 0.0]\nend = [1.0, 1.0, 0.0]\n\n\
+                [[pins]]\nrod = \"a\"\nat = 0.0\n\n[[pins]]\nrod = \"b\"\nat = 0.0\n\n\
+                [[loads]]\nrod = \"b\"\nat = 1.0\nforce = [0.0, -1.0, 0.0]\n\n\
+                [solver]\nmethod = \"static\"\n";
+    Scene::from_toml(text).expect("the starting scene");
+    let names = [
+        "rods[1].stretch_stiffness",
+        "world.gravity[0]",
+        "loads[0].force[1]",
+    ]
+    .map(String::from);
+    let values = [33.25, 0.125, -2.5];
+    let out = with_fitted_values("s.toml", text, &names, &values).expect("written");
+    let scene = Scene::from_toml(&out).expect("a scene");
+    assert_eq!(scene.rods[0].stretch_stiffness, 10.0);
+    assert_eq!(scene.rods[1].stretch_stiffness, 33.25);
+    assert_eq!(
+        scene.world.gravity,
+        [0.125, -9.81, 0.0],
+        "the default written whole"
+    );
+    assert_eq!(scene.loads[0].force, Some([0.0, -2.5, 0.0]));
+    assert!(out.contains("stretch_stiffness = 10.0 # guessed"), "{out}");
+    assert!(out.contains("[[rods]] # upper"), "{out}");
+    let e = with_fitted_values("s.toml", text, &["rod.stretch_stiffness".into()], &[1.0])
+        .expect_err("the scene has [[rods]]");
+    assert!(e.to_string().contains("rod.stretch_stiffness"), "{e}");
 }

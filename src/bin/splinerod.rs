@@ -95,6 +95,9 @@ enum Command {
         /// Where to write the fit as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Where to write the scene with the fitted values (comments and layout kept).
+        #[arg(long)]
+        scene_out: Option<PathBuf>,
     },
     /// Measures step times, O(n) scaling, ensemble throughput and memory on this machine.
     Bench {
@@ -234,10 +237,12 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
             observations,
             params,
             json,
+            scene_out,
         } => {
             let fitted = splinerod::fit::command::fit_files(&scene, &observations, &params)?;
             fitted.summary().iter().for_each(|line| say!("{line}"));
             json.map_or(Ok(()), |path| write_json(&path, &fitted.json()))?;
+            scene_out.map_or(Ok(()), |out| fitted.write_scene(&scene, &out))?;
             Ok(ExitCode::SUCCESS)
         }
         Command::Sensitivities {

@@ -1,10 +1,12 @@
-//! `splinerod fit SCENE --observations OBS.csv --params P1,P2,… [--json FIT.json]`: reads
+//! `splinerod fit SCENE --observations OBS.csv --params P1,P2,… [--json FIT.json]
+//! [--scene-out FITTED.toml]`: reads
 //! the scene and the observation files, fits, and reports — the summary lines the
 //! command prints and the JSON it writes (`parameters` with `name`, `value` and `std`,
 //! `correlation`, `residual_rms`, `iterations`, `simulations`, `converged`, and
 //! `unidentifiable`: the groups of parameters the observations cannot separate, by
 //! name, with the direction in the fitted variables that they do not see).
 
+use crate::fit::scene_out::with_fitted_values;
 use crate::fit::{FitReport, ObservationFile, SceneFit};
 use crate::{Error, Scene};
 use std::path::{Path, PathBuf};
@@ -34,6 +36,19 @@ pub fn fit_files(scene: &Path, observations: &[PathBuf], params: &str) -> Result
 }
 
 impl NamedFit {
+    /// Writes the scene file at `scene` with the fitted values in place of its own to
+    /// `out` (`--scene-out`, [`crate::fit::scene_out`]).
+    pub fn write_scene(&self, scene: &Path, out: &Path) -> Result<(), Error> {
+        let io = |path: &Path| {
+            let path = path.display().to_string();
+            move |source| Error::Io { path, source }
+        };
+        let text = std::fs::read_to_string(scene).map_err(io(scene))?;
+        let file = scene.display().to_string();
+        let fitted = with_fitted_values(&file, &text, &self.names, &self.report.parameters)?;
+        std::fs::write(out, fitted).map_err(io(out))
+    }
+
     /// What `splinerod fit` prints: each parameter with its deviation, the residual,
     /// the cost, and a warning per group the observations cannot separate.
     pub fn summary(&self) -> Vec<String> {

@@ -7,6 +7,7 @@ pub mod gradient_free;
 pub mod least_squares;
 pub mod observations;
 pub mod scene_fit;
+pub mod scene_out;
 pub mod synthetic;
 
 pub use gradient_free::{nelder_mead, GradientFreeFit};
