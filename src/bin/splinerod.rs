@@ -86,7 +86,7 @@ enum Command {
     Fit {
         /// The scene (`method = "static"`), its values the fit's start.
         scene: PathBuf,
-        /// Observation files (CSV t,s,x,y,z or t,pin,fx,fy,fz; optional sigma); repeatable.
+        /// Observation files (CSV t,s,x,y,z; t,x,y,z; t,pin,fx,fy,fz; optional sigma); repeatable.
         #[arg(long, required = true)]
         observations: Vec<PathBuf>,
         /// Parameters by scene path, comma-separated (as for `sensitivities`).

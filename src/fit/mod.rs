@@ -2,6 +2,7 @@
 //! observation files ([`observations`]). The least-squares fit driven by the
 //! sensitivities builds on them.
 
+pub mod closest;
 pub mod command;
 pub mod gradient_free;
 pub mod least_squares;

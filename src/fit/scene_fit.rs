@@ -8,10 +8,11 @@
 //! Observed now, in a static scene: markers (`t,s,x,y,z`) and pin forces
 //! (`t,pin,fx,fy,fz`: the force `[[pins]]` entry `pin` exerts on the rod, as the run's
 //! `pin_forces`; residual \\((F_{obs} - F(p))/\sigma\\) with the multipliers'
-//! derivative). Unlabelled points and trajectories need what is not built yet (the
-//! distance to the curve's nearest point, dynamic sensitivities): such files are refused,
-//! naming them.
+//! derivative), and unlabelled points (`t,x,y,z`: residual the distance to the curve's
+//! nearest point over σ, [`crate::fit::closest`]). Trajectories need dynamic
+//! sensitivities: a dynamic scene is refused by the sensitivities, naming it.
 
+use crate::fit::closest::closest_point;
 use crate::fit::gradient_free::{nelder_mead, GradientFreeFit};
 use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
 use crate::fit::observations::{ObservationFile, ObservationKind};
@@ -34,6 +35,8 @@ pub struct SceneFit<'a> {
     markers: Vec<(Real, Vector3<Real>, Real)>,
     /// Per measured pin force: the `[[pins]]` entry, the force, σ.
     forces: Vec<(usize, Vector3<Real>, Real)>,
+    /// Per unlabelled point: the point, σ.
+    points: Vec<(Vector3<Real>, Real)>,
 }
 
 impl<'a> SceneFit<'a> {
@@ -41,7 +44,7 @@ impl<'a> SceneFit<'a> {
     /// a file that cannot be used yet or does not fit the scene.
     pub fn new(scene: &Scene, paths: &[&'a str], files: &[ObservationFile]) -> Result<Self, Error> {
         let length = scene.rod_spec(0).rest_length;
-        let (mut markers, mut forces) = (Vec::new(), Vec::new());
+        let (mut markers, mut forces, mut points) = (Vec::new(), Vec::new(), Vec::new());
         for file in files {
             file.check(scene.pins.len(), length, None)?;
             for row in &file.rows {
@@ -54,8 +57,9 @@ impl<'a> SceneFit<'a> {
                     (ObservationKind::PinForce, _, Some(pin)) => {
                         forces.push((pin, value, row.sigma))
                     }
+                    (ObservationKind::Point, _, _) => points.push((value, row.sigma)),
                     _ => {
-                        let reason = "only markers (t,s,x,y,z) and pin forces (t,pin,fx,fy,fz) can be fitted yet: unlabelled points need the distance to the curve's nearest point";
+                        let reason = "a row that is neither a marker, a pin force nor a point";
                         return Err(Error::field("observations", &file.path, reason));
                     }
                 }
@@ -67,6 +71,7 @@ impl<'a> SceneFit<'a> {
             paths: paths.to_vec(),
             markers,
             forces,
+            points,
         })
     }
 
@@ -108,7 +113,7 @@ impl<'a> SceneFit<'a> {
 
 impl Model for SceneFit<'_> {
     fn residual_count(&self) -> usize {
-        3 * (self.markers.len() + self.forces.len())
+        3 * (self.markers.len() + self.forces.len()) + self.points.len()
     }
 
     fn evaluate(
@@ -154,6 +159,23 @@ impl Model for SceneFit<'_> {
                     for c in 0..3 {
                         j[(3 * (first + f) + c) * n + k] = -d[*pin][c] / sigma;
                     }
+                }
+            }
+        }
+        let first = 3 * (self.markers.len() + self.forces.len());
+        for (i, (observed, sigma)) in self.points.iter().enumerate() {
+            let (s, model) = closest_point(&found.rod, observed)?;
+            let gap = observed - model;
+            let d = gap.norm();
+            r[first + i] = d / sigma;
+            if let Some(j) = j.as_deref_mut() {
+                let row = found.rod.basis_at(s)?;
+                let normal = if d > 0.0 { gap / d } else { Vector3::zeros() };
+                for (k, dq) in found.control_points.iter().enumerate() {
+                    let dc: Vector3<Real> = (0..row.order)
+                        .map(|a| dq[row.first + a] * row.value[a])
+                        .sum();
+                    j[(first + i) * n + k] = -normal.dot(&dc) / sigma;
                 }
             }
         }

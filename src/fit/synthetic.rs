@@ -9,7 +9,7 @@ use crate::sensitivity::{static_sensitivities, StaticSensitivities};
 use crate::{Error, Scene};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::{Distribution, Normal, Uniform};
 use splinerod_core::Real;
 
 /// `count` markers spread evenly over the static `truth`'s first rod (at `s = k L /
@@ -21,27 +21,59 @@ pub fn noisy_markers(
     sigma: Real,
     seed: u64,
 ) -> Result<ObservationFile, Error> {
+    let length = truth.rod_spec(0).rest_length;
+    let at = |k: usize, _: &mut ChaCha8Rng| k as Real * length / count as Real;
+    let rows = noisy_rows(truth, count, (sigma, seed), at, true)?;
+    let path = format!("synthetic markers (σ = {sigma} m, seed {seed})");
+    let kind = ObservationKind::Marker;
+    Ok(ObservationFile { path, kind, rows })
+}
+
+/// `count` unlabelled points near the static `truth`'s first rod: at material
+/// coordinates drawn uniformly over it (not reported: a point cloud's points carry no
+/// label), each coordinate with Gaussian noise of standard deviation `sigma` (m, > 0),
+/// seeded with `seed`.
+pub fn noisy_points(
+    truth: &Scene,
+    count: usize,
+    sigma: Real,
+    seed: u64,
+) -> Result<ObservationFile, Error> {
+    let length = truth.rod_spec(0).rest_length;
+    let along = Uniform::new_inclusive(0.0, length)
+        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))?;
+    let at = |_: usize, rng: &mut ChaCha8Rng| along.sample(rng);
+    let rows = noisy_rows(truth, count, (sigma, seed), at, false)?;
+    let path = format!("synthetic points (σ = {sigma} m, seed {seed})");
+    let kind = ObservationKind::Point;
+    Ok(ObservationFile { path, kind, rows })
+}
+
+/// Rows `1 ..= count` observing the static `truth`'s first rod at `at(k)` (m of rest
+/// length), with noise `(sigma, seed)`; `labelled`: the rows say where.
+fn noisy_rows(
+    truth: &Scene,
+    count: usize,
+    (sigma, seed): (Real, u64),
+    mut at: impl FnMut(usize, &mut ChaCha8Rng) -> Real,
+    labelled: bool,
+) -> Result<Vec<Observation>, Error> {
     let (found, noise, mut rng) = equilibrium_and_noise(truth, sigma, seed)?;
     let length = truth.rod_spec(0).rest_length;
-    let rows = (1..=count)
+    (1..=count)
         .map(|k| {
-            let s = k as Real * length / count as Real;
+            let s = at(k, &mut rng);
             let p = found.rod.point(truth.material_coordinate(s / length))?;
             Ok(Observation {
                 t: None,
-                s: Some(s),
+                s: labelled.then_some(s),
                 pin: None,
                 value: std::array::from_fn(|c| p[c] + noise.sample(&mut rng)),
                 sigma,
                 line: k + 1,
             })
         })
-        .collect::<Result<_, Error>>()?;
-    Ok(ObservationFile {
-        path: format!("synthetic markers (σ = {sigma} m, seed {seed})"),
-        kind: ObservationKind::Marker,
-        rows,
-    })
+        .collect()
 }
 
 /// The force of `[[pins]]` entry `pin` of the static `truth` on its rod, each component
