@@ -75,7 +75,7 @@ pub use problems::{elastic_catenary, hard_cases, locking};
 pub use report::{adaptive as report_adaptive, adaptive_study};
 pub use run::rods as rods_output;
 pub use run::{observe, runner};
-pub use world::{estimate, path, step_report, substep};
+pub use world::{estimate, path, sliver, step_report, substep};
 
 pub use error::Error;
 pub use run::knot_track::KnotTrack;
