@@ -64,6 +64,7 @@ pub mod report;
 pub mod run;
 pub mod scene;
 pub mod sensitivity;
+pub mod sensitivity_at;
 pub mod world;
 
 // The paths of the flat layout before the modules above, kept so code written against

@@ -376,6 +376,17 @@ impl Simulation {
         Ok(values_array(py, tension))
     }
 
+    /// Derivatives `(len(params), len(s), 3)` of a static scene's equilibrium points at
+    /// material coordinates `s` (m) with respect to the scene paths `params`
+    /// (`rod.bending_stiffness`, `world.gravity[1]`, ...): solved anew from the scene.
+    fn sensitivities<'py>(
+        &self,
+        params: &Bound<'py, PyAny>,
+        s: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<Real>>> {
+        crate::calibration::sensitivities(&self.driver, params, s)
+    }
+
     /// Energies of `member`, J: `kinetic` and one entry per energy term.
     #[pyo3(signature = (member = 0))]
     fn energies<'py>(&self, py: Python<'py>, member: usize) -> PyResult<Bound<'py, PyDict>> {
