@@ -114,3 +114,26 @@ def test_fit_refuses_bad_input():
         splinerod.fit(cable(), [], PARAMS)
     with pytest.raises(OSError):
         splinerod.fit(cable(), ["/nonexistent/markers.csv"], PARAMS)
+
+
+def test_the_calibration_example_recovers_its_cable(tmp_path):
+    import pathlib
+    import subprocess
+    import sys
+
+    example = pathlib.Path(__file__).resolve().parents[1] / "examples" / "calibrate_cable.py"
+    done = subprocess.run(
+        [sys.executable, str(example), "--plot", str(tmp_path / "calibration.png")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    fitted = {
+        line.split()[0]: float(line.split()[3])
+        for line in done.stdout.splitlines()
+        if line.startswith("rod.")
+    }
+    assert abs(fitted["rod.bending_stiffness"] / 0.05 - 1) < 0.02, done.stdout
+    assert abs(fitted["rod.stretch_stiffness"] / 40 - 1) < 0.02, done.stdout
+    assert "converged: True" in done.stdout
