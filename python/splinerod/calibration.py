@@ -105,7 +105,7 @@ def fit(
     ``(label, csv_text)`` pairs, or arrays of static markers (see ``markers_csv``). The
     scene's values of the parameters are the starting point. Bad input raises
     ``SceneError`` naming it; an unreadable file ``OSError``."""
-    if isinstance(observations, (str, os.PathLike)):
+    if isinstance(observations, (str, os.PathLike, np.ndarray)):
         observations = [observations]
     given = [_observation(item, i) for i, item in enumerate(observations)]
     return FitResult.from_json(fit_json(scene, given, params))

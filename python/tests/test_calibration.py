@@ -137,3 +137,10 @@ def test_the_calibration_example_recovers_its_cable(tmp_path):
     assert abs(fitted["rod.bending_stiffness"] / 0.05 - 1) < 0.02, done.stdout
     assert abs(fitted["rod.stretch_stiffness"] / 40 - 1) < 0.02, done.stdout
     assert "converged: True" in done.stdout
+
+
+def test_fit_takes_one_array_and_a_scene_object():
+    scene = splinerod.Scene(cable(ea=80.0, ei=2e-3))
+    result = splinerod.fit(scene, markers(), "rod.stretch_stiffness, rod.bending_stiffness")
+    assert result.converged
+    assert abs(result.parameters["rod.bending_stiffness"] / TRUE_EI - 1) < 0.02
