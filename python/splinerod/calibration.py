@@ -52,13 +52,12 @@ class FitResult:
         """The result of the JSON of ``splinerod fit`` (with ``warnings``)."""
         data = json.loads(text)
         names = [p["name"] for p in data["parameters"]]
-        number = lambda v: float("inf") if v is None else float(v)  # noqa: E731
         return FitResult(
             names=names,
             parameters={p["name"]: float(p["value"]) for p in data["parameters"]},
-            std={p["name"]: number(p["std"]) for p in data["parameters"]},
+            std={p["name"]: _number(p["std"], float("inf")) for p in data["parameters"]},
             correlation=np.array(
-                [[(float("nan") if c is None else float(c)) for c in row] for row in data["correlation"]], dtype=float
+                [[_number(c, float("nan")) for c in row] for row in data["correlation"]], dtype=float
             ).reshape(len(names), len(names)),
             residual_rms=float(data["residual_rms"]),
             iterations=int(data["iterations"]),
@@ -67,6 +66,11 @@ class FitResult:
             warnings=list(data.get("warnings", [])),
             unidentifiable=list(data.get("unidentifiable", [])),
         )
+
+
+def _number(value: Any, missing: float) -> float:
+    """A JSON number, `missing` for the null JSON writes for an infinite or NaN one."""
+    return missing if value is None else float(value)
 
 
 def markers_csv(markers: npt.ArrayLike) -> str:
