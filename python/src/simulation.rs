@@ -8,7 +8,9 @@
 //! return one array over all members.
 
 use crate::adaptivity::Adaptivity;
-use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
+use crate::arrays::{
+    points_array, points_at, points_from, stacked_points, values_array, values_from,
+};
 use crate::driver::Driver;
 use crate::errors::{guard, scene_error, shield, IntoPyResult, SplinerodError};
 use crate::integrator::Integrator;
@@ -488,21 +490,6 @@ impl Simulation {
             sim.system.rod.len()
         )
     }
-}
-
-/// Material points of `sim` at `s` (m); `SceneError` naming `s` outside the rod.
-fn points_at(
-    py: Python<'_>,
-    sim: &splinerod::Simulation,
-    s: &[Real],
-) -> PyResult<Vec<Vector3<Real>>> {
-    let rod = &sim.system.rod;
-    s.iter()
-        .map(|&x| {
-            rod.point(x)
-                .map_err(|e| scene_error(py, Some("s"), e.to_string()))
-        })
-        .collect()
 }
 
 /// The entries of a per-control-point field that belong to distinct control points (a

@@ -11,9 +11,9 @@
 //! closer to a simple interior knot than [`SLIVER`] times the span it falls in, that knot
 //! is removed after the cut, provided the curve moves by at most [`SLIVER_TOLERANCE`]
 //! times the rod's length (the sliver's cubic differs from its neighbour's extension by
-//! the jump of the third derivative times `ℓ³/6`: nanometres). A cut away from knots, or
-//! one whose sliver cannot be merged within the tolerance, is exactly the plain
-//! [`Rod::cut`].
+//! about the jump of the third derivative times `ℓ³/6`, far below that). A cut away
+//! from knots, or one whose sliver cannot be merged within the tolerance, is exactly
+//! the plain [`Rod::cut`].
 
 use crate::world::system::RodSystem;
 #[cfg(doc)]
