@@ -64,6 +64,7 @@ pub mod report;
 pub mod run;
 pub mod scene;
 pub mod sensitivity;
+pub mod sensitivity_at;
 pub mod world;
 
 // The paths of the flat layout before the modules above, kept so code written against
@@ -75,7 +76,7 @@ pub use problems::{elastic_catenary, hard_cases, locking};
 pub use report::{adaptive as report_adaptive, adaptive_study};
 pub use run::rods as rods_output;
 pub use run::{observe, runner};
-pub use world::{estimate, path, step_report, substep};
+pub use world::{estimate, path, sliver, step_report, substep};
 
 pub use error::Error;
 pub use run::knot_track::KnotTrack;

@@ -17,6 +17,10 @@ integrators, ``RodSystem``, ``Simulation``). Bad input raises ``SceneError`` (a
 repository's ``scenes/`` (compiled in, so found from any directory) and
 ``bundled_scenes()`` lists them. ``kernels()`` names the kernel set the
 process computes with (``SPLINEROD_KERNELS``; results are bit-identical under one set).
+
+Calibrate: ``fit(scene, observations, params)`` fits scene parameters to observed
+markers, points or pin forces and returns a ``FitResult``; a static scene's
+``sim.sensitivities(params, s)`` gives the exact derivatives of its equilibrium.
 """
 
 from ._splinerod import (
@@ -48,6 +52,7 @@ from ._splinerod import (
     bundled_scenes,
     kernels,
 )
+from .calibration import FitResult, fit, markers_csv
 
 __all__ = [
     "Adaptivity",
@@ -56,6 +61,7 @@ __all__ = [
     "BSplineSpace",
     "Clamp",
     "Energy",
+    "FitResult",
     "Gravity",
     "ImplicitEuler",
     "ImplicitMidpoint",
@@ -76,5 +82,7 @@ __all__ = [
     "__version__",
     "bundled_scene",
     "bundled_scenes",
+    "fit",
     "kernels",
+    "markers_csv",
 ]

@@ -7,7 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
-__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver', 'kernels', 'bundled_scene', 'bundled_scenes']
+__all__ = ['Adaptivity', 'SceneError', 'SplinerodError', '__version__', 'Scene', 'Simulation', 'Material', 'BSplineSpace', 'PeriodicBSplineSpace', 'Rod', 'Pin', 'RodSystem', 'Energy', 'Stretching', 'Bending', 'Gravity', 'PointSpring', 'PointForce', 'Clamp', 'Integrator', 'ImplicitEuler', 'ImplicitMidpoint', 'Bdf2', 'StaticSolver', 'kernels', 'bundled_scene', 'bundled_scenes', 'fit_json']
 
 _ArrayLike = npt.ArrayLike
 _Points = npt.NDArray[np.float64]
@@ -21,6 +21,15 @@ def bundled_scene(name: str) -> "Scene":
 
 def bundled_scenes() -> list[str]:
     """The names of the bundled scenes, sorted."""
+
+def fit_json(
+    scene: Union["Scene", Dict[str, Any], str, "os.PathLike[str]"],
+    observations: Sequence[Union[str, "os.PathLike[str]", tuple[str, str]]],
+    params: Union[str, Sequence[str]],
+) -> str:
+    """The JSON of `splinerod fit` (plus `warnings`) for `scene` fitted to
+    `observations` (paths, CSV text or (label, csv_text) pairs); `splinerod.fit` wraps
+    it into a `FitResult`."""
 
 class SceneError(ValueError):
     """Bad input; `field` names the field (dotted path), `None` if no single one."""
@@ -96,6 +105,9 @@ class Simulation:
     @overload
     def positions(self, s: _ArrayLike, member: int = 0) -> _Points: ...
     def tension(self, s: _ArrayLike, member: int = 0) -> _Points: ...
+    def sensitivities(self, params: Union[str, Sequence[str]], s: _ArrayLike) -> _Points:
+        """Derivatives (len(params), len(s), 3) of a static scene's equilibrium points at
+        material coordinates `s` (m) with respect to the scene paths `params`."""
     def energies(self, member: int = 0) -> Dict[str, float]: ...
     def stacked_positions(self, s: _ArrayLike) -> _Points: ...
     def stacked_control_points(self) -> _Points: ...

@@ -143,3 +143,18 @@ pub fn check_finite(
 pub fn finite(py: Python<'_>, field: &str, v: Real) -> PyResult<Real> {
     check_finite(py, field, [v]).map(|()| v)
 }
+
+/// Material points of `sim` at `s` (m); `SceneError` naming `s` outside the rod.
+pub fn points_at(
+    py: Python<'_>,
+    sim: &splinerod::Simulation,
+    s: &[Real],
+) -> PyResult<Vec<Vector3<Real>>> {
+    let rod = &sim.system.rod;
+    s.iter()
+        .map(|&x| {
+            rod.point(x)
+                .map_err(|e| scene_error(py, Some("s"), e.to_string()))
+        })
+        .collect()
+}

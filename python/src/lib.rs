@@ -11,6 +11,7 @@
 mod adaptivity;
 mod arrays;
 mod bundled;
+mod calibration;
 mod driver;
 mod errors;
 mod integrator;
@@ -63,6 +64,7 @@ fn _splinerod(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<integrator::StaticSolver>()?;
     m.add_class::<adaptivity::Adaptivity>()?;
     m.add_function(wrap_pyfunction!(kernels, m)?)?;
+    m.add_function(wrap_pyfunction!(calibration::fit_json, m)?)?;
     m.add_function(wrap_pyfunction!(bundled::bundled_scene, m)?)?;
     m.add_function(wrap_pyfunction!(bundled::bundled_scenes, m)?)?;
     Ok(())

@@ -17,13 +17,20 @@ pub struct Scene {
     text: String,
 }
 
+impl Scene {
+    /// The Rust scene.
+    pub(crate) fn inner(&self) -> &splinerod::Scene {
+        &self.scene
+    }
+}
+
 #[pymethods]
 impl Scene {
     /// A scene from a dict with the TOML file's tables and keys (lists of dicts for
     /// `[[pins]]` and the like; numpy arrays are accepted where lists are). A path or
     /// TOML text raises `TypeError` pointing to `Scene.from_toml`.
     #[new]
-    fn new(table: &Bound<'_, PyAny>) -> PyResult<Self> {
+    pub(crate) fn new(table: &Bound<'_, PyAny>) -> PyResult<Self> {
         let py = table.py();
         let table = table.cast::<PyDict>().map_err(|_| not_a_dict(table))?;
         let value = toml_value(table.as_any(), "")?;

@@ -8,7 +8,9 @@
 //! return one array over all members.
 
 use crate::adaptivity::Adaptivity;
-use crate::arrays::{points_array, points_from, stacked_points, values_array, values_from};
+use crate::arrays::{
+    points_array, points_at, points_from, stacked_points, values_array, values_from,
+};
 use crate::driver::Driver;
 use crate::errors::{guard, scene_error, shield, IntoPyResult, SplinerodError};
 use crate::integrator::Integrator;
@@ -376,6 +378,17 @@ impl Simulation {
         Ok(values_array(py, tension))
     }
 
+    /// Derivatives `(len(params), len(s), 3)` of a static scene's equilibrium points at
+    /// material coordinates `s` (m) with respect to the scene paths `params`
+    /// (`rod.bending_stiffness`, `world.gravity[1]`, ...): solved anew from the scene.
+    fn sensitivities<'py>(
+        &self,
+        params: &Bound<'py, PyAny>,
+        s: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray3<Real>>> {
+        crate::calibration::sensitivities(&self.driver, params, s)
+    }
+
     /// Energies of `member`, J: `kinetic` and one entry per energy term.
     #[pyo3(signature = (member = 0))]
     fn energies<'py>(&self, py: Python<'py>, member: usize) -> PyResult<Bound<'py, PyDict>> {
@@ -477,21 +490,6 @@ impl Simulation {
             sim.system.rod.len()
         )
     }
-}
-
-/// Material points of `sim` at `s` (m); `SceneError` naming `s` outside the rod.
-fn points_at(
-    py: Python<'_>,
-    sim: &splinerod::Simulation,
-    s: &[Real],
-) -> PyResult<Vec<Vector3<Real>>> {
-    let rod = &sim.system.rod;
-    s.iter()
-        .map(|&x| {
-            rod.point(x)
-                .map_err(|e| scene_error(py, Some("s"), e.to_string()))
-        })
-        .collect()
 }
 
 /// The entries of a per-control-point field that belong to distinct control points (a

@@ -28,7 +28,18 @@ pub fn fit_files(scene: &Path, observations: &[PathBuf], params: &str) -> Result
         .map(|p| ObservationFile::read(p))
         .collect::<Result<Vec<_>, _>>()?;
     let names: Vec<&str> = params.split(',').map(str::trim).collect();
-    let report = SceneFit::new(&scene, &names, &files)?.fit()?;
+    fit_scene(&scene, &files, &names)
+}
+
+/// Fits the parameters `names` (scene paths) of `scene` to the observations `files`
+/// (read with [`ObservationFile::read`] or [`ObservationFile::parse`]): what
+/// [`fit_files`] does after reading, and Python's `splinerod.fit`.
+pub fn fit_scene(
+    scene: &Scene,
+    files: &[ObservationFile],
+    names: &[&str],
+) -> Result<NamedFit, Error> {
+    let report = SceneFit::new(scene, names, files)?.fit()?;
     Ok(NamedFit {
         names: names.iter().map(|s| s.to_string()).collect(),
         report,
@@ -67,16 +78,25 @@ impl NamedFit {
             r.simulations,
             if r.converged { "" } else { ", NOT converged" }
         ));
-        for (group, direction) in &r.unidentifiable {
-            let names: Vec<&str> = group.iter().map(|&k| self.names[k].as_str()).collect();
-            lines.push(format!(
-                "warning: the observations cannot separate {}: moving them along {direction:.3?} \
-                 (log of positive parameters) changes nothing they see; their values are where \
-                 the fit started along that direction, their deviations infinite",
-                names.join(", ")
-            ));
-        }
+        lines.extend(self.warnings().into_iter().map(|w| format!("warning: {w}")));
         lines
+    }
+
+    /// One warning per group of parameters the observations cannot separate (without
+    /// the `warning: ` that [`summary`](Self::summary) puts before each).
+    pub fn warnings(&self) -> Vec<String> {
+        let groups = self.report.unidentifiable.iter();
+        groups
+            .map(|(group, direction)| {
+                let names: Vec<&str> = group.iter().map(|&k| self.names[k].as_str()).collect();
+                format!(
+                    "the observations cannot separate {}: moving them along {direction:.3?} \
+                     (log of positive parameters) changes nothing they see; their values are \
+                     where the fit started along that direction, their deviations infinite",
+                    names.join(", ")
+                )
+            })
+            .collect()
     }
 
     /// The JSON of `splinerod fit` (module docs).

@@ -14,6 +14,7 @@ pub(crate) mod lanes;
 pub mod path;
 pub mod saved;
 pub(crate) mod simulation;
+pub mod sliver;
 pub use simulation::MAX_SETTLE_ROUNDS;
 pub mod step_report;
 pub mod substep;

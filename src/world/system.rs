@@ -244,9 +244,16 @@ impl RodSystem {
     }
 
     /// Cuts the rod at material coordinate `s` (m; see [`Rod::cut`]), telling the
-    /// energies; returns the knots inserted.
+    /// energies; returns the knots inserted. A cut just beside a simple knot also
+    /// removes that knot, merging the sliver span it would leave at the new end
+    /// ([`crate::sliver`]).
     pub fn cut(&mut self, s: Real) -> Result<usize, CoreError> {
-        self.change_knots(|rod, heard| rod.cut_with(s, heard))
+        let sliver = self.sliver_knot(s);
+        let inserted = self.change_knots(|rod, heard| rod.cut_with(s, heard))?;
+        if let Some(t) = sliver {
+            self.merge_sliver(t)?;
+        }
+        Ok(inserted)
     }
 
     /// An error if the rod's knots changed (or the rod was replaced) without going

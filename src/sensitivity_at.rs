@@ -1,0 +1,89 @@
+//! Static sensitivities at chosen material coordinates: the derivatives of the
+//! equilibrium's material points `C(s)` for coordinates `s` (m of rest length, as
+//! Python's `positions(s)`) chosen by the caller, not only at the scene's output
+//! samples ([`crate::sensitivity`] computes them at those): with the derivatives of
+//! the control points `dq/dp` from the same solve,
+//! \\(\mathrm{d}C(s)/\mathrm{d}p = \sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p\\).
+//! Python's `Simulation.sensitivities(params, s)` is this.
+
+use crate::sensitivity::{static_sensitivities, StaticSensitivities};
+use crate::{Error, Scene};
+use nalgebra::Vector3;
+use splinerod_core::Real;
+
+/// The sensitivities of a static scene's equilibrium at chosen material coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensitivitiesAt {
+    /// The parameters, by scene path, with their values.
+    pub parameters: Vec<(String, Real)>,
+    /// The material coordinates asked for, m.
+    pub s: Vec<Real>,
+    /// Per parameter, the derivative of the point at each coordinate, m per unit.
+    pub positions: Vec<Vec<[Real; 3]>>,
+    /// The equilibrium's point at each coordinate, m.
+    pub at: Vec<[Real; 3]>,
+}
+
+/// The equilibrium of the static `scene` and the derivatives of its points at the
+/// material coordinates `s` (m) with respect to the parameters `paths` (scene paths, as
+/// [`static_sensitivities`]). A coordinate that is not finite or lies outside the rod
+/// is an error naming `s` (checked before the solve).
+pub fn static_sensitivities_at(
+    scene: &Scene,
+    paths: &[&str],
+    s: &[Real],
+) -> Result<SensitivitiesAt, Error> {
+    let rod = (
+        scene.material_coordinate(0.0),
+        scene.material_coordinate(1.0),
+    );
+    check_coordinates(s, rod)?;
+    let sensitivities = static_sensitivities(scene, paths)?;
+    evaluate_at(&sensitivities, s)
+}
+
+/// [`StaticSensitivities`] evaluated at the material coordinates `s` (m) of its rod.
+pub fn evaluate_at(
+    sensitivities: &StaticSensitivities,
+    s: &[Real],
+) -> Result<SensitivitiesAt, Error> {
+    let rod = &sensitivities.rod;
+    check_coordinates(s, rod.basis().domain())?;
+    let rows = s
+        .iter()
+        .map(|&x| rod.basis_at(x))
+        .collect::<Result<Vec<_>, _>>()?;
+    let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
+        let at = |b: &splinerod_core::BasisValues| {
+            (0..b.order)
+                .map(|k| q[b.first + k] * b.value[k])
+                .sum::<Vector3<Real>>()
+        };
+        rows.iter().map(|b| at(b).into()).collect()
+    };
+    Ok(SensitivitiesAt {
+        parameters: sensitivities.parameters.clone(),
+        s: s.to_vec(),
+        positions: sensitivities
+            .control_points
+            .iter()
+            .map(|d| point(d))
+            .collect(),
+        at: point(&rod.positions),
+    })
+}
+
+/// An error naming `s` unless every coordinate is finite and inside `[start, end]`.
+fn check_coordinates(s: &[Real], (start, end): (Real, Real)) -> Result<(), Error> {
+    match s
+        .iter()
+        .find(|x| !(x.is_finite() && **x >= start && **x <= end))
+    {
+        Some(x) => Err(Error::field(
+            "s",
+            x,
+            format!("material coordinates must lie on the rod, in [{start}, {end}] m"),
+        )),
+        None => Ok(()),
+    }
+}
