@@ -52,7 +52,22 @@ pub fn tangents(
             context: "the exact Hessian at the equilibrium, for sensitivities",
         });
     }
-    let zeros = vec![Vector3::zeros(); n];
+    let zeros = std::mem::take(&mut ws.origin);
+    let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
+    ws.origin = zeros;
+    solved.map(|()| stats)
+}
+
+/// Solves each case with the factorised matrix, from the iterate `zeros`.
+fn solve_cases(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    zeros: &[Vector3<Real>],
+    cases: &mut [Tangent],
+    stats: &mut StepStats,
+) -> Result<(), IntegratorError> {
+    let n = zeros.len();
     for case in cases.iter_mut() {
         let pins = system.pins().len();
         if case.residual_rate.len() != n || case.target_rates.len() != pins {
@@ -66,9 +81,9 @@ pub fn tangents(
         ws.constraints.targets.clone_from(&case.target_rates);
         ws.floor = 0.0;
         ws.motion = None;
-        solve_factored(problem, system, &zeros, ws, &mut stats)?;
+        solve_factored(problem, system, zeros, ws, stats)?;
         case.positions.clone_from(&ws.dx);
         case.multipliers.clone_from(&ws.multipliers);
     }
-    Ok(stats)
+    Ok(())
 }
