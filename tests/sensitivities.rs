@@ -156,7 +156,7 @@ fn bad_parameter_paths_are_named() {
         .expect_err("dynamic")
         .to_string();
     assert!(
-        e.contains("solver.method") && e.contains("not built yet"),
+        e.contains("solver.method") && e.contains("dynamic_sensitivities"),
         "{e}"
     );
 }

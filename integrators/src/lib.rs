@@ -139,6 +139,12 @@ pub trait System: Send + Sync {
     fn interrupted(&self) -> bool {
         false
     }
+    /// The concrete system, for a caller's callback handed the system back (a forward
+    /// sensitivity's [`ParameterRates`] reads the facade's energies through it).
+    /// Default `None`.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 }
 
 /// Counters of one step or solve, for statistics and regression snapshots.

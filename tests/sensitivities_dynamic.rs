@@ -1,0 +1,182 @@
+//! Forward sensitivities of runs (#48) against central finite differences of two full
+//! runs (two step sizes, extrapolated): a swinging cable and a grabbed cable, each with
+//! implicit Euler and BDF2, over 1 s, for EA, EI, the density, the damping, gravity and
+//! a point load; refused runs and bad parameters named.
+
+use splinerod::sensitivity::{dynamic_sensitivities, set_parameter};
+use splinerod::{Real, Scene};
+
+/// A cable pinned at one end, released horizontally under gravity (with a side
+/// component), bending, damping and a point load.
+const SWINGING: &str = "[rod]\nrest_length = 1.0\nlinear_density = 0.1\n\
+    stretch_stiffness = 200.0\nbending_stiffness = 1e-3\ndamping = 0.3\n\
+    control_points = 12\nstart = [0.0, 0.0, 0.0]\nend = [1.0, 0.0, 0.0]\n\n\
+    [[pins]]\nat = 0.0\n\n[world]\ngravity = [0.5, -9.81, 0.0]\n\n\
+    [[loads]]\nat = 0.7\nforce = [0.0, 0.05, 0.02]\n\n\
+    [solver]\nmethod = \"METHOD\"\ndt = 0.01\nduration = 1.0\ntolerance = 1e-13\n\n\
+    [output]\nsamples = 21\n";
+
+/// A slack cable pinned at both ends, grabbed at 30 % from t = 0.2 s (where the point
+/// then is: the grab's start depends on the parameters) and pulled aside by t = 0.6 s.
+const GRABBED: &str = "[rod]\nrest_length = 1.0\nlinear_density = 0.1\n\
+    stretch_stiffness = 100.0\nbending_stiffness = 2e-3\ndamping = 1.0\n\
+    control_points = 14\nstart = [0.0, 0.0, 0.0]\nend = [0.8, 0.0, 0.0]\n\n\
+    [[pins]]\nat = 0.0\n\n[[pins]]\nat = 1.0\n\n\
+    [world]\ngravity = [0.0, -9.81, 0.0]\n\n\
+    [[grabs]]\nat = 0.3\nto = [0.3, -0.25, 0.1]\nstart_time = 0.2\nend_time = 0.6\n\
+    stiffness = 500.0\n\n\
+    [solver]\nmethod = \"METHOD\"\ndt = 0.01\nduration = 1.0\ntolerance = 1e-13\n\n\
+    [output]\nsamples = 21\n";
+
+/// The scene `text` stepped by `method`.
+fn scene(text: &str, method: &str) -> Scene {
+    Scene::from_toml(&text.replace("METHOD", method)).expect("scene")
+}
+
+/// The final samples of a full run of `scene`.
+fn samples(scene: &Scene) -> Vec<[Real; 3]> {
+    splinerod::run(scene).expect("run").samples.positions
+}
+
+/// The final samples of `scene` with parameter `path` at `value`.
+fn perturbed(scene: &Scene, path: &str, value: Real) -> Vec<[Real; 3]> {
+    let mut s = scene.clone();
+    set_parameter(&mut s, path, value).expect("set");
+    samples(&s)
+}
+
+/// The largest relative error of `exact` (per sample) against the central differences
+/// of runs at h and h/2 (relative 1e-3), extrapolated.
+fn error_against_runs(scene: &Scene, path: &str, value: Real, exact: &[[Real; 3]]) -> Real {
+    let central = |h: Real| -> Vec<[Real; 3]> {
+        let (a, b) = (
+            perturbed(scene, path, value + h),
+            perturbed(scene, path, value - h),
+        );
+        let pairs = a.iter().zip(&b);
+        pairs
+            .map(|(a, b)| std::array::from_fn(|c| (a[c] - b[c]) / (2.0 * h)))
+            .collect()
+    };
+    let h = 1e-3 * value.abs().max(1e-3);
+    let (coarse, fine) = (central(h), central(h / 2.0));
+    let largest = exact
+        .iter()
+        .flatten()
+        .fold(0.0, |m: Real, x| m.max(x.abs()));
+    let mut error: Real = 0.0;
+    for ((d, c), f) in exact.iter().zip(&coarse).zip(&fine) {
+        for i in 0..3 {
+            let extrapolated = (4.0 * f[i] - c[i]) / 3.0;
+            error = error.max((d[i] - extrapolated).abs() / largest.max(1e-300));
+        }
+    }
+    println!("{path} = {value}: |dx/dp| up to {largest:.3e}, relative error {error:.2e}");
+    error
+}
+
+/// Checks the final sensitivities of `scene` to `paths` against runs; the worst error.
+fn check(scene: &Scene, paths: &[&str]) -> Real {
+    let exact = dynamic_sensitivities(scene, paths).expect("sensitivities");
+    let base = samples(scene);
+    for (p, q) in exact.at.iter().zip(&base) {
+        let gap = (0..3).map(|c| (p[c] - q[c]).abs()).fold(0.0, Real::max);
+        assert!(gap < 1e-12, "the sensitivities' run is the run: {gap:e}");
+    }
+    let steps = exact.times.len();
+    assert_eq!(steps, 100, "one record per step");
+    assert!((exact.times[steps - 1].t - 1.0).abs() < 1e-12);
+    assert_eq!(exact.times[steps - 1].positions, exact.positions);
+    let mut worst: Real = 0.0;
+    for (k, path) in paths.iter().enumerate() {
+        let value = exact.parameters[k].1;
+        worst = worst.max(error_against_runs(scene, path, value, &exact.positions[k]));
+    }
+    worst
+}
+
+const SWINGING_PARAMETERS: [&str; 7] = [
+    "rod.stretch_stiffness",
+    "rod.bending_stiffness",
+    "rod.linear_density",
+    "rod.damping",
+    "world.gravity[1]",
+    "world.gravity[0]",
+    "loads[0].force[2]",
+];
+
+const GRABBED_PARAMETERS: [&str; 4] = [
+    "rod.bending_stiffness",
+    "rod.linear_density",
+    "rod.damping",
+    "world.gravity[1]",
+];
+
+#[test]
+fn a_swinging_cable_s_implicit_euler_sensitivities_match_finite_differences() {
+    let error = check(&scene(SWINGING, "implicit-euler"), &SWINGING_PARAMETERS);
+    assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn a_swinging_cable_s_bdf2_sensitivities_match_finite_differences() {
+    let error = check(&scene(SWINGING, "bdf2"), &SWINGING_PARAMETERS);
+    assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn a_grabbed_cable_s_implicit_euler_sensitivities_match_finite_differences() {
+    let error = check(&scene(GRABBED, "implicit-euler"), &GRABBED_PARAMETERS);
+    assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn a_grabbed_cable_s_bdf2_sensitivities_match_finite_differences() {
+    let error = check(&scene(GRABBED, "bdf2"), &GRABBED_PARAMETERS);
+    assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn the_recorded_times_carry_the_derivatives_of_the_trajectory() {
+    // At t = 0.5 s: the record against runs of half the duration.
+    let full = scene(SWINGING, "bdf2");
+    let exact = dynamic_sensitivities(&full, &["rod.bending_stiffness"]).expect("run");
+    let half = &exact.times[49];
+    assert!((half.t - 0.5).abs() < 1e-12);
+    let mut short = full.clone();
+    short.solver.duration = Some(0.5);
+    let error = error_against_runs(
+        &short,
+        "rod.bending_stiffness",
+        exact.parameters[0].1,
+        &half.positions[0],
+    );
+    assert!(error < 1e-4, "relative error {error:e}");
+    let json = exact.json();
+    let times = json["times"].as_array().expect("times");
+    assert_eq!(times.len(), 100);
+    assert!(times[49]["positions"]["rod.bending_stiffness"][20][1].is_number());
+}
+
+#[test]
+fn unsupported_runs_and_parameters_are_named() {
+    let base = scene(SWINGING, "implicit-euler");
+    let midpoint = scene(SWINGING, "implicit-midpoint");
+    let e = dynamic_sensitivities(&midpoint, &["rod.damping"]).expect_err("midpoint");
+    assert!(e.to_string().contains("solver.method"), "{e}");
+    let mut tolerance = base.clone();
+    tolerance.solver.time_tolerance = Some(1e-4);
+    let e = dynamic_sensitivities(&tolerance, &["rod.damping"]).expect_err("tolerance");
+    assert!(e.to_string().contains("solver.time_tolerance"), "{e}");
+    for (path, words) in [
+        ("rod.radius", "not a rod parameter"),
+        ("rod.twist_stiffness", "no energy"),
+        ("loads[1].force[0]", "1 [[loads]]"),
+        ("world.gravity", "not a scalar parameter"),
+    ] {
+        let e = dynamic_sensitivities(&base, &[path])
+            .expect_err(path)
+            .to_string();
+        assert!(e.contains(path) && e.contains(words), "{path}: {e}");
+    }
+}
