@@ -205,6 +205,9 @@ fn one_step(
         let reason = "the knots changed during the run: sensitivities need a fixed basis";
         return Err(Error::field("adaptivity", "knot change", reason));
     }
+    if states.is_empty() {
+        return Ok(());
+    }
     rates.grabs_started(&sim.system, states)?;
     let forward = sim.integrator.forward().ok_or_else(|| {
         let reason = "this integrator has no forward sensitivities";
