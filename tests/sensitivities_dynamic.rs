@@ -191,3 +191,42 @@ fn unsupported_runs_and_parameters_are_named() {
         assert!(e.contains(path) && e.contains(words), "{path}: {e}");
     }
 }
+
+#[test]
+fn the_command_line_writes_a_run_s_sensitivities_and_names_bad_input() {
+    use crate::common::cli::{fresh_dir, ok, refused};
+    let dir = fresh_dir("dynamic_sensitivities");
+    let path = dir.join("swinging.toml");
+    let short = SWINGING
+        .replace("METHOD", "bdf2")
+        .replace("duration = 1.0", "duration = 0.1");
+    std::fs::write(&path, short).expect("scene written");
+    let (scene, json) = (path.to_str().unwrap(), dir.join("s.json"));
+    let json = json.to_str().unwrap();
+    let params = "--params=rod.damping,loads[0].force[1]";
+    ok(&["sensitivities", scene, params, "--json", json]);
+    let text = std::fs::read_to_string(json).expect("written");
+    let value: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    assert_eq!(value["parameters"][0]["name"], "rod.damping");
+    let times = value["times"].as_array().expect("times");
+    assert_eq!(times.len(), 10);
+    let last = &times[9];
+    assert!((last["t"].as_f64().unwrap() - 0.1).abs() < 1e-12);
+    assert_eq!(
+        last["positions"]["loads[0].force[1]"],
+        value["positions"]["loads[0].force[1]"]
+    );
+    assert_eq!(
+        value["positions"]["rod.damping"].as_array().unwrap().len(),
+        21
+    );
+    let line = refused(&["sensitivities", scene, "--params=rod.colour"]);
+    assert!(line.contains("rod.colour"), "{line}");
+    let midpoint = dir.join("midpoint.toml");
+    let text = SWINGING.replace("METHOD", "implicit-midpoint");
+    std::fs::write(&midpoint, text).expect("scene written");
+    let midpoint = midpoint.to_str().unwrap();
+    let line = refused(&["sensitivities", midpoint, "--params=rod.damping"]);
+    assert!(line.contains("solver.method"), "{line}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -263,7 +263,12 @@ fn base_rates(work: &mut ForwardWork, state: &ForwardState, kind: StepKind) {
 /// The tangent problem's residual rate (the negated right-hand side of the module
 /// docs' equation for `z`) into `work.scratch`, from the bases' rates and the gradient
 /// rate in `work`, and the mass and damping rates `(m, a)`.
-fn residual_rate(stepper: &Stepper, (m, a): (Real, Real), system: &dyn System, work: &mut ForwardWork) {
+fn residual_rate(
+    stepper: &Stepper,
+    (m, a): (Real, Real),
+    system: &dyn System,
+    work: &mut ForwardWork,
+) {
     let rod = system.rod();
     let beta = stepper.step.map_or(0.0, |s| s.beta);
     let x = &rod.velocities;
@@ -294,7 +299,12 @@ fn advance(state: &mut ForwardState, case: &Tangent, kind: StepKind, beta: Real,
         .positions
         .iter_mut()
         .zip(state.velocities.iter_mut())
-        .zip(state.previous_positions.iter().zip(&state.previous_velocities))
+        .zip(
+            state
+                .previous_positions
+                .iter()
+                .zip(&state.previous_velocities),
+        )
         .zip(&case.positions);
     for (((q, v), (q_n, v_n)), z) in rows {
         let base_q = q_n * a - *q * b;

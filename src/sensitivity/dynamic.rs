@@ -38,9 +38,7 @@
 //! inextensible rod (its multiplier updates between steps), and the density or damping
 //! of one of several `[[rods]]`.
 
-use super::{
-    add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target,
-};
+use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
@@ -105,7 +103,9 @@ impl DynamicSensitivities {
         let times: Vec<serde_json::Value> = self
             .times
             .iter()
-            .map(|t| serde_json::json!({ "t": t.t, "positions": by_name(&t.positions), "at": t.at }))
+            .map(
+                |t| serde_json::json!({ "t": t.t, "positions": by_name(&t.positions), "at": t.at }),
+            )
             .collect();
         serde_json::json!({
             "parameters": names.collect::<Vec<_>>(),
@@ -135,10 +135,7 @@ impl DynamicSensitivities {
 
 /// The run of the dynamic `scene` and its forward sensitivities to the parameters
 /// `paths` (see the module docs).
-pub fn dynamic_sensitivities(
-    scene: &Scene,
-    paths: &[&str],
-) -> Result<DynamicSensitivities, Error> {
+pub fn dynamic_sensitivities(scene: &Scene, paths: &[&str]) -> Result<DynamicSensitivities, Error> {
     refuse(scene)?;
     let targets: Vec<Target> = paths
         .iter()
@@ -166,7 +163,11 @@ pub fn dynamic_sensitivities(
         .map(|d| crate::run::pins::fold_pin_forces(scene, &sim, d.pin_forces.clone()))
         .collect();
     Ok(DynamicSensitivities {
-        parameters: paths.iter().map(|p| p.to_string()).zip(rates.values).collect(),
+        parameters: paths
+            .iter()
+            .map(|p| p.to_string())
+            .zip(rates.values)
+            .collect(),
         s,
         positions: states.iter().map(|d| point(&rows, &d.positions)).collect(),
         at: point(&rows, &sim.system.rod.positions),
@@ -360,7 +361,12 @@ impl Rates {
     }
 
     /// `out = ∂∇E/∂p_k` on `system` (see the module docs).
-    fn rate(&mut self, system: &RodSystem, k: usize, out: &mut [Vector3<Real>]) -> Result<(), Error> {
+    fn rate(
+        &mut self,
+        system: &RodSystem,
+        k: usize,
+        out: &mut [Vector3<Real>],
+    ) -> Result<(), Error> {
         out.iter_mut().for_each(|o| *o = Vector3::zeros());
         match self.targets[k] {
             Target::Energy(name, segment) => {
