@@ -30,6 +30,9 @@
 //! insertion or removal: the old state is in another basis) or the rod's state is not
 //! bitwise the one this integrator left (someone else moved it, or a sub-step was
 //! rolled back).
+//!
+//! Its [`Forward`] form carries forward sensitivities through each step, the midpoint
+//! start included, with the two-step base's derivative ([`crate::forward`]).
 
 use crate::forward::{Forward, ForwardState, ForwardWork, ParameterRates, StepKind};
 use crate::incremental::{Increment, Stepper};

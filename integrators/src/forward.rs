@@ -4,7 +4,7 @@
 //! [`crate::Bdf2`] (and BDF2's implicit-midpoint start) with the step's own Newton matrix.
 //!
 //! **The step.** Every one of these steps solves the incremental problem
-//! ([`crate::incremental`]) for the velocity `x`, with base \\(\hat q, \hat v\\), effective
+//! (the crate's `incremental.rs`) for the velocity `x`, with base \\(\hat q, \hat v\\), effective
 //! step β and reach ρ: at the solution
 //!
 //! \\[ r = M\big((1 + \beta\alpha) x - \hat v\big) + \beta \nabla E(q_e; p) = G^T\mu,
@@ -37,10 +37,10 @@
 //!
 //! **Exact, and not.** The derivatives are those of the discrete run (to the Newton
 //! tolerance of its steps): the Hessian is exact, every term of the residual is
-//! differentiated. What an energy takes from the start of the step
-//! ([`Lifecycle::begin_step`](../../splinerod_energies/trait.Lifecycle.html), e.g. a
-//! lagged friction's sticking points) is held fixed: its dependence on `p` through
-//! the previous state is left out.
+//! differentiated. What an energy takes from the start of the step (the energies'
+//! `begin_step`, e.g. a lagged friction's sticking points) is held fixed: its dependence
+//! on `p` through the previous state is left out. Steps handed over by the batched
+//! form ([`crate::Batched::preload`]) have no solve here to differentiate: an error.
 
 use crate::newton::Tangent;
 use crate::{IntegratorError, NewtonParams, StepStats, System};

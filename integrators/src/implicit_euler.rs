@@ -10,6 +10,9 @@
 //!
 //! This is the shared incremental problem ([`crate::incremental`]) with
 //! \\(\hat q = q_0\\), \\(\hat v = v_0\\) and β = ρ = h.
+//!
+//! Its [`Forward`] form carries forward sensitivities through each solved step
+//! ([`crate::forward`]).
 
 use crate::forward::{Forward, ForwardState, ForwardWork, ParameterRates, StepKind};
 use crate::incremental::{Increment, Stepper};
