@@ -1,15 +1,43 @@
 //! Forward sensitivities ([`splinerod_integrators::forward`]) of a swinging test string
 //! (pinned at one end, released horizontally under gravity, damped) against central
 //! differences of runs, for implicit Euler and BDF2 (its midpoint start included): by
-//! the string's stiffness, a component of gravity and the damping rate.
+//! the string's stiffness, a component of gravity and the damping rate; no allocation
+//! per step once sized.
 
 use nalgebra::Vector3;
+use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
+use std::cell::Cell;
 use splinerod_core::{Pin, Real};
 use splinerod_integrators::conformance::TestString;
 use splinerod_integrators::{
     Bdf2, ForwardState, ImplicitEuler, ImplicitMidpoint, Integrator, IntegratorError, NewtonParams,
     ParameterRates, System,
 };
+
+/// Counts the heap allocations of this thread.
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: defers every operation to the system allocator; only counts calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { SystemAlloc.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { SystemAlloc.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { SystemAlloc.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
 
 /// The parameters: stiffness `k`, gravity's `y`, damping `α`.
 #[derive(Debug, Clone, Copy)]
@@ -171,4 +199,34 @@ fn other_schemes_have_no_forward_form_and_a_forward_step_needs_a_step() {
     let forward = euler.forward().expect("implicit Euler has one");
     let e = forward.propagate(&mut string, &mut rates, &mut states);
     assert!(e.is_err(), "no step taken yet");
+}
+
+#[test]
+fn forward_steps_do_not_allocate_after_warm_up() {
+    for name in ["implicit-euler", "bdf2"] {
+        let p = Parameters {
+            k: 4.0,
+            gy: -9.81,
+            alpha: 0.5,
+        };
+        let mut string = TestString::new(10, p.k, Vector3::new(0.3, p.gy, 0.0)).unwrap();
+        string.pins = vec![Pin::here(&string.rod, 0.0).unwrap()];
+        let mut integrator = scheme(name);
+        let mut states = vec![ForwardState::new(string.rod.len()); 3];
+        let mut rates = Rates(p);
+        let mut step = |string: &mut TestString| {
+            integrator.step(string, 0.01).expect("step");
+            let f = integrator.forward().expect("a forward form");
+            f.propagate(string, &mut rates, &mut states).expect("propagate");
+        };
+        for _ in 0..3 {
+            step(&mut string);
+        }
+        let before = ALLOCATIONS.with(|c| c.get());
+        for _ in 0..20 {
+            step(&mut string);
+        }
+        let count = ALLOCATIONS.with(|c| c.get()) - before;
+        assert_eq!(count, 0, "{name}: {count} allocations in 20 forward steps");
+    }
 }
