@@ -33,12 +33,15 @@ fn scene(text: &str, method: &str) -> Scene {
     Scene::from_toml(&text.replace("METHOD", method)).expect("scene")
 }
 
-/// The final samples of a full run of `scene`.
+/// The final samples of a full run of `scene`, then its pin forces (the last step's).
 fn samples(scene: &Scene) -> Vec<[Real; 3]> {
-    splinerod::run(scene).expect("run").samples.positions
+    let result = splinerod::run(scene).expect("run");
+    let mut out = result.samples.positions;
+    out.extend(result.pin_forces);
+    out
 }
 
-/// The final samples of `scene` with parameter `path` at `value`.
+/// The final samples (and pin forces) of `scene` with parameter `path` at `value`.
 fn perturbed(scene: &Scene, path: &str, value: Real) -> Vec<[Real; 3]> {
     let mut s = scene.clone();
     set_parameter(&mut s, path, value).expect("set");
@@ -46,8 +49,14 @@ fn perturbed(scene: &Scene, path: &str, value: Real) -> Vec<[Real; 3]> {
 }
 
 /// The largest relative error of `exact` (per sample) against the central differences
-/// of runs at h and h/2 (relative 1e-3), extrapolated.
-fn error_against_runs(scene: &Scene, path: &str, value: Real, exact: &[[Real; 3]]) -> Real {
+/// of runs at h and h/2 (relative 1e-3), extrapolated; with `forces`, of the pin forces'
+/// derivatives too (each part against its own largest derivative).
+fn error_against_runs(
+    scene: &Scene,
+    path: &str,
+    value: Real,
+    (exact, forces): (&[[Real; 3]], &[[Real; 3]]),
+) -> Real {
     let central = |h: Real| -> Vec<[Real; 3]> {
         let (a, b) = (
             perturbed(scene, path, value + h),
@@ -60,26 +69,36 @@ fn error_against_runs(scene: &Scene, path: &str, value: Real, exact: &[[Real; 3]
     };
     let h = 1e-3 * value.abs().max(1e-3);
     let (coarse, fine) = (central(h), central(h / 2.0));
-    let largest = exact
-        .iter()
-        .flatten()
-        .fold(0.0, |m: Real, x| m.max(x.abs()));
-    let mut error: Real = 0.0;
-    for ((d, c), f) in exact.iter().zip(&coarse).zip(&fine) {
-        for i in 0..3 {
-            let extrapolated = (4.0 * f[i] - c[i]) / 3.0;
-            error = error.max((d[i] - extrapolated).abs() / largest.max(1e-300));
+    let mut worst: Real = 0.0;
+    let mut report = String::new();
+    for (part, (exact, offset)) in [(exact, 0), (forces, exact.len())].into_iter().enumerate() {
+        let largest = exact
+            .iter()
+            .flatten()
+            .fold(0.0, |m: Real, x| m.max(x.abs()));
+        let mut error: Real = 0.0;
+        let rows = exact.iter().zip(&coarse[offset..]).zip(&fine[offset..]);
+        for ((d, c), f) in rows {
+            for i in 0..3 {
+                let extrapolated = (4.0 * f[i] - c[i]) / 3.0;
+                error = error.max((d[i] - extrapolated).abs() / largest.max(1e-300));
+            }
         }
+        if !exact.is_empty() {
+            let what = ["samples", "pin forces"][part];
+            report += &format!(" {what}: up to {largest:.3e}, relative error {error:.2e};");
+        }
+        worst = worst.max(error);
     }
-    println!("{path} = {value}: |dx/dp| up to {largest:.3e}, relative error {error:.2e}");
-    error
+    println!("{path} = {value}:{report}");
+    worst
 }
 
 /// Checks the final sensitivities of `scene` to `paths` against runs; the worst error.
 fn check(scene: &Scene, paths: &[&str]) -> Real {
     let exact = dynamic_sensitivities(scene, paths).expect("sensitivities");
     let base = samples(scene);
-    for (p, q) in exact.at.iter().zip(&base) {
+    for (p, q) in exact.at.iter().chain(&exact.forces).zip(&base) {
         let gap = (0..3).map(|c| (p[c] - q[c]).abs()).fold(0.0, Real::max);
         assert!(gap < 1e-12, "the sensitivities' run is the run: {gap:e}");
     }
@@ -90,7 +109,8 @@ fn check(scene: &Scene, paths: &[&str]) -> Real {
     let mut worst: Real = 0.0;
     for (k, path) in paths.iter().enumerate() {
         let value = exact.parameters[k].1;
-        worst = worst.max(error_against_runs(scene, path, value, &exact.positions[k]));
+        let derivatives = (&exact.positions[k][..], &exact.pin_forces[k][..]);
+        worst = worst.max(error_against_runs(scene, path, value, derivatives));
     }
     worst
 }
@@ -149,7 +169,7 @@ fn the_recorded_times_carry_the_derivatives_of_the_trajectory() {
         &short,
         "rod.bending_stiffness",
         exact.parameters[0].1,
-        &half.positions[0],
+        (&half.positions[0], &[]),
     );
     assert!(error < 1e-4, "relative error {error:e}");
     // During the grab's pull (from its start at 0.2 s to 0.6 s), whose start point moves
@@ -161,7 +181,8 @@ fn the_recorded_times_carry_the_derivatives_of_the_trajectory() {
     let pulled = &exact_grab.times[39];
     assert!((pulled.t - 0.4).abs() < 1e-12);
     let value = exact_grab.parameters[0].1;
-    let error = error_against_runs(&short, "rod.linear_density", value, &pulled.positions[0]);
+    let derivatives = (&pulled.positions[0][..], &[][..]);
+    let error = error_against_runs(&short, "rod.linear_density", value, derivatives);
     assert!(error < 1e-4, "relative error {error:e}");
     let json = exact.json();
     let times = json["times"].as_array().expect("times");

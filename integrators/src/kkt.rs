@@ -206,6 +206,21 @@ impl Constraints {
         self.correct_for(x, flat, mu, true);
     }
 
+    /// The eliminated pins' multipliers again, after [`Self::correct`], from the final
+    /// step `flat` (changed since by the remainder's correction) and `rest`, per control
+    /// point the row's part besides the banded product: \\(r - a + sR\,\Delta x\\)
+    /// for the residual `r`, the augmentation's right-hand side `a` and the remainder's
+    /// product (the banded rows leave it out). The other pins' multipliers are kept.
+    pub fn remainder_multipliers(
+        &self,
+        flat: &[Real],
+        rest: &[Vector3<Real>],
+        mu: &mut [Vector3<Real>],
+    ) {
+        let rest = |_: usize, k: usize| rest[k];
+        self.points.multipliers_from(flat, &self.others, rest, mu);
+    }
+
     /// Solves the KKT system with homogeneous constraints, `G Δx = 0`: `flat` holds the
     /// right-hand side on entry and the step on return; `mu` is scratch (the Schur pins'
     /// multipliers land there, the point pins' are not computed: no caller reads them).

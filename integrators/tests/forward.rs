@@ -5,14 +5,14 @@
 //! per step once sized.
 
 use nalgebra::Vector3;
-use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
-use std::cell::Cell;
 use splinerod_core::{Pin, Real};
 use splinerod_integrators::conformance::TestString;
 use splinerod_integrators::{
     Bdf2, ForwardState, ImplicitEuler, ImplicitMidpoint, Integrator, IntegratorError, NewtonParams,
     ParameterRates, System,
 };
+use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
+use std::cell::Cell;
 
 /// Counts the heap allocations of this thread.
 struct Counting;
@@ -217,7 +217,8 @@ fn forward_steps_do_not_allocate_after_warm_up() {
         let mut step = |string: &mut TestString| {
             integrator.step(string, 0.01).expect("step");
             let f = integrator.forward().expect("a forward form");
-            f.propagate(string, &mut rates, &mut states).expect("propagate");
+            f.propagate(string, &mut rates, &mut states)
+                .expect("propagate");
         };
         for _ in 0..3 {
             step(&mut string);

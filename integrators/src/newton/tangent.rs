@@ -82,8 +82,36 @@ fn solve_cases(
         ws.floor = 0.0;
         ws.motion = None;
         solve_factored(problem, system, zeros, ws, stats)?;
+        let corrected = problem.hessian_scale() > 0.0 && !ws.solver.is_indefinite();
+        if corrected && system.has_hessian_remainder() {
+            remainder_multipliers(problem, system, ws, zeros);
+        }
         case.positions.clone_from(&ws.dx);
         case.multipliers.clone_from(&ws.multipliers);
     }
     Ok(())
+}
+
+/// After a solve with the remainder's correction: the eliminated pins' multipliers
+/// from the final step, their rows completed by the remainder's product
+/// \\(sR\, \dot x\\) (a Newton step's multipliers need not: its step vanishes at
+/// convergence, a tangent's does not). Pins through the Schur complement keep theirs.
+fn remainder_multipliers(
+    problem: &dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    zeros: &[Vector3<Real>],
+) {
+    // The row's rest: r − a (a = ρGᵀc, the augmentation's right-hand side at x = 0)
+    // plus sR ẋ.
+    let rho = problem.augmentation();
+    ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
+    ws.constraints.add_gram_rhs(rho, zeros, &mut ws.base);
+    for (b, r) in ws.base.iter_mut().zip(&ws.r) {
+        *b = r - *b;
+    }
+    let scale = problem.hessian_scale();
+    system.add_hessian_remainder(&ws.dx, scale, &mut ws.base);
+    ws.constraints
+        .remainder_multipliers(&ws.flat, &ws.base, &mut ws.multipliers);
 }
