@@ -200,6 +200,23 @@ fn unsupported_runs_and_parameters_are_named() {
     tolerance.solver.time_tolerance = Some(1e-4);
     let e = dynamic_sensitivities(&tolerance, &["rod.damping"]).expect_err("tolerance");
     assert!(e.to_string().contains("solver.time_tolerance"), "{e}");
+    let adaptive = Scene::load(format!(
+        "{}/scenes/grab_adaptive.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("scene");
+    let e = dynamic_sensitivities(&adaptive, &["rod.damping"]).expect_err("adaptive");
+    assert!(e.to_string().contains("adaptivity"), "{e}");
+    // A slack cable released straight (compressed): its first step needs sub-steps.
+    let slack = GRABBED
+        .replace("METHOD", "implicit-euler")
+        .replace("end = [1.0, 0.0, 0.0]", "end = [0.8, 0.0, 0.0]");
+    let slack = Scene::from_toml(&slack).expect("scene");
+    let e = dynamic_sensitivities(&slack, &["rod.damping"]).expect_err("sub-steps");
+    assert!(
+        e.to_string().contains("solver.dt") && e.to_string().contains("sub-steps"),
+        "{e}"
+    );
     for (path, words) in [
         ("rod.radius", "not a rod parameter"),
         ("rod.twist_stiffness", "no energy"),
