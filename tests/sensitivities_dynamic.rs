@@ -103,7 +103,7 @@ fn check(scene: &Scene, paths: &[&str]) -> Real {
         assert!(gap < 1e-12, "the sensitivities' run is the run: {gap:e}");
     }
     let steps = exact.times.len();
-    assert_eq!(steps, 100, "one record per step");
+    assert_eq!(steps, scene.step_count(), "one record per step");
     assert!((exact.times[steps - 1].t - 1.0).abs() < 1e-12);
     assert_eq!(exact.times[steps - 1].positions, exact.positions);
     let mut worst: Real = 0.0;
@@ -267,4 +267,33 @@ fn the_command_line_writes_a_run_s_sensitivities_and_names_bad_input() {
     let line = refused(&["sensitivities", midpoint, "--params=rod.damping"]);
     assert!(line.contains("solver.method"), "{line}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_cable_swinging_onto_a_plane_s_sensitivities_are_close_to_finite_differences() {
+    // The swinging cable's end sweeps down onto a plane (the barrier contact, whose
+    // stiffness follows the loads; no friction). Not exact (measured: samples 1e-5 …
+    // 4e-5, pin forces up to 4e-4, against 1e-9 without contact): the barrier adapts its
+    // stiffness at every step's start from the smallest gap, a dependence on the state
+    // the forward step holds fixed — the likely cause, not fully diagnosed (with an
+    // explicit stiffness EA's error falls to 1e-7, the density's stays 2e-5).
+    let text = SWINGING
+        .replace("METHOD", "implicit-euler")
+        .replace("control_points = 12", "control_points = 12\nradius = 0.01")
+        .replace("dt = 0.01", "dt = 0.002")
+        + "\n[contact]\n\n[[obstacles]]\nkind = \"plane\"\n\
+           point = [0.0, -0.7, 0.0]\nnormal = [0.0, 1.0, 0.0]\n";
+    let scene = Scene::from_toml(&text).expect("scene");
+    let free = samples(&self::scene(SWINGING, "implicit-euler"));
+    let moved = samples(&scene)
+        .iter()
+        .zip(&free)
+        .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, Real::max))
+        .fold(0.0, Real::max);
+    assert!(moved > 1e-2, "the plane changes the run: {moved} m");
+    let error = check(
+        &scene,
+        &["rod.stretch_stiffness", "rod.linear_density", "rod.damping"],
+    );
+    assert!(error < 1e-3, "relative error {error:e}");
 }
