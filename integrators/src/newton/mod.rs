@@ -180,6 +180,8 @@ pub struct NewtonWorkspace {
     motion: Option<Real>,
     /// Zeros, the iterate of the tangent solves ([`tangents`]).
     origin: Vec<Vector3<Real>>,
+    /// The problem's matrix, unfactorised, for the tangent solves' multipliers.
+    spare: BlockBanded,
 }
 
 impl NewtonWorkspace {
