@@ -19,8 +19,14 @@
 //! parameter no energy of the scene depends on — is an error naming the path.
 //!
 //! Outputs: the samples' positions and every `[[pins]]` entry's force (the derivative of
-//! the multipliers, from the same solve). Not yet: dynamic runs (forward sensitivities
-//! through the integrators' steps), pin positions as parameters.
+//! the multipliers, from the same solve). Runs (implicit Euler, BDF2) have theirs from
+//! [`dynamic_sensitivities`] (forward sensitivities through every step, see
+//! `sensitivity/dynamic.rs`), which also take `rod.damping`. Not yet: pin positions as
+//! parameters.
+
+mod dynamic;
+
+pub use dynamic::{dynamic_sensitivities, DynamicSensitivities, TimeSensitivities};
 
 use crate::{Error, RodSystem, Scene};
 use nalgebra::Vector3;
@@ -100,18 +106,23 @@ impl StaticSensitivities {
 }
 
 /// What a parameter path names.
+#[derive(Debug, Clone, Copy, PartialEq)]
 enum Target {
     /// An energy parameter: its name and the segment (`None`: any energy of the rod).
     Energy(&'static str, Option<usize>),
     /// Component `c` of load `i`'s force.
     Load(usize, usize),
+    /// The mass-proportional damping rate of the rod (`None`) or of `[[rods]]` entry `k`:
+    /// a parameter of dynamic runs only.
+    Damping(Option<usize>),
 }
 
 /// The equilibrium of the static `scene` and its sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensitivities, Error> {
     if scene.solver.method != crate::scene::Method::Static {
-        let reason = "sensitivities of dynamic runs are not built yet: use method = \"static\"";
+        let reason = "a static solve's sensitivities need method = \"static\" \
+                      (a run's are dynamic_sensitivities')";
         return Err(Error::field(
             "solver.method",
             format!("{:?}", scene.solver.method),
@@ -199,10 +210,13 @@ fn target(scene: &Scene, path: &str) -> Result<Target, Error> {
         "linear_density",
     ];
     let energy = |field: &str, segment: Option<usize>| {
+        if field == "damping" {
+            return Ok(Target::Damping(segment));
+        }
         let name = rod_fields.iter().find(|f| **f == field);
         name.map(|n| Target::Energy(n, segment)).ok_or_else(|| {
             bad(format!(
-                "not a rod parameter with sensitivities ({})",
+                "not a rod parameter with sensitivities ({}, damping)",
                 rod_fields.join(", ")
             ))
         })
@@ -270,6 +284,10 @@ fn derivative(
     let rod = &system.rod;
     let mut b = vec![Vector3::zeros(); rod.len()];
     match *target {
+        Target::Damping(_) => {
+            let reason = "damping does not change an equilibrium (a parameter of runs)";
+            Err(Error::field("params", format!("\"{path}\""), reason))
+        }
         Target::Load(i, c) => {
             let load = &system.loads[i].force;
             let row = rod.basis_at(load.at)?;
@@ -279,15 +297,7 @@ fn derivative(
             Ok((load.force[c], b))
         }
         Target::Energy(name, segment) => {
-            let mut found = false;
-            for energy in system.acting() {
-                let caps = energy.capabilities();
-                let on = segment.is_none() || caps.segment == segment;
-                if let Some(p) = caps.parameters.filter(|_| on) {
-                    found |= p.add_gradient_derivative(rod, name, &mut b)?;
-                }
-            }
-            if !found {
+            if !energy_rate(system, name, segment, &mut b)? {
                 let reason =
                     "no energy of the scene depends on it (is it set, and is it not a constraint?)";
                 return Err(Error::field("params", format!("\"{path}\""), reason));
@@ -295,6 +305,25 @@ fn derivative(
             Ok((value(scene, name, segment), b))
         }
     }
+}
+
+/// Adds \\(\partial \nabla E / \partial p\\) of every acting energy with the
+/// parameter `name` (on rod `segment`) to `out`; whether any has it.
+fn energy_rate(
+    system: &RodSystem,
+    name: &str,
+    segment: Option<usize>,
+    out: &mut [Vector3<Real>],
+) -> Result<bool, Error> {
+    let mut found = false;
+    for energy in system.acting() {
+        let caps = energy.capabilities();
+        let on = segment.is_none() || caps.segment == segment;
+        if let Some(p) = caps.parameters.filter(|_| on) {
+            found |= p.add_gradient_derivative(&system.rod, name, out)?;
+        }
+    }
+    Ok(found)
 }
 
 /// The contact barrier's default stiffness follows the loads
@@ -311,17 +340,27 @@ fn add_barrier_stiffness_derivative(
     value: Real,
     b: &mut [Vector3<Real>],
 ) -> Result<(), Error> {
+    if let Some(ratio) = barrier_rate(system, scene, target, value)? {
+        add_barrier_rate(system, ratio, b, &mut Vec::new());
+    }
+    Ok(())
+}
+
+/// \\((\mathrm{d}\kappa/\mathrm{d}p) / \kappa\\) of the contact barrier's derived
+/// stiffness (see [`add_barrier_stiffness_derivative`]); `None` without a derived one.
+fn barrier_rate(
+    system: &RodSystem,
+    scene: &Scene,
+    target: &Target,
+    value: Real,
+) -> Result<Option<Real>, Error> {
     let derived = scene
         .contact
         .as_ref()
         .is_some_and(|c| c.enabled && c.stiffness.is_none());
-    let Some(contact) = system
-        .acting()
-        .find(|e| e.name() == "contact")
-        .filter(|_| derived)
-    else {
-        return Ok(());
-    };
+    if !derived || !system.acting().any(|e| e.name() == "contact") {
+        return Ok(None);
+    }
     let kappa = |p: Real| -> Result<Real, Error> {
         let mut s = scene.clone();
         set(&mut s, target, p);
@@ -331,19 +370,33 @@ fn add_barrier_stiffness_derivative(
     let here = kappa(value)?;
     let slope = (kappa(value + h)? - kappa(value - h)?) / (2.0 * h);
     if slope == 0.0 || here <= 0.0 {
-        return Ok(());
+        return Ok(None);
     }
-    let mut gradient = vec![Vector3::zeros(); system.rod.len()];
-    contact.add_gradient(&system.rod, &mut gradient);
-    for (b, g) in b.iter_mut().zip(&gradient) {
-        *b += g * (slope / here);
+    Ok(Some(slope / here))
+}
+
+/// `b += ratio · ∇E_contact` at the rod's positions (`gradient`: scratch).
+fn add_barrier_rate(
+    system: &RodSystem,
+    ratio: Real,
+    b: &mut [Vector3<Real>],
+    gradient: &mut Vec<Vector3<Real>>,
+) {
+    if let Some(contact) = system.acting().find(|e| e.name() == "contact") {
+        gradient.clear();
+        gradient.resize(system.rod.len(), Vector3::zeros());
+        contact.add_gradient(&system.rod, gradient);
+        for (b, g) in b.iter_mut().zip(gradient.iter()) {
+            *b += g * ratio;
+        }
     }
-    Ok(())
 }
 
 /// Sets the parameter `target` of `scene` to `v`.
 fn set(scene: &mut Scene, target: &Target, v: Real) {
     match *target {
+        Target::Damping(Some(k)) => scene.rods[k].damping = v,
+        Target::Damping(None) => scene.rod.damping = v,
         Target::Load(i, c) => {
             if let Some(f) = scene.loads[i].force.as_mut() {
                 f[c] = v;
@@ -364,6 +417,15 @@ fn set(scene: &mut Scene, target: &Target, v: Real) {
                 _ => scene.world.gravity[2] = v,
             }
         }
+    }
+}
+
+/// The scene value of the parameter `target`.
+fn target_value(scene: &Scene, target: &Target) -> Real {
+    match *target {
+        Target::Energy(name, segment) => value(scene, name, segment),
+        Target::Load(i, c) => scene.loads[i].force.map_or(0.0, |f| f[c]),
+        Target::Damping(segment) => scene.rod_spec(segment.unwrap_or(0)).damping,
     }
 }
 

@@ -61,6 +61,7 @@ mod run_imports;
 mod scene_errors;
 mod scenes;
 mod sensitivities;
+mod sensitivities_dynamic;
 mod session;
 mod several_rods;
 mod shards;

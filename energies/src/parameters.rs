@@ -30,7 +30,9 @@ pub trait Parameters: Send + Sync {
 
 /// `out += ∇E / value` for an energy linear in its parameter of value `value`
 /// (`E = value · Ê`); an error if `value` is zero or not finite (the energy then has no
-/// gradient to scale: its derivative is `∇Ê`, which the energy must give itself).
+/// gradient to scale: its derivative is `∇Ê`, which the energy must give itself). The
+/// gradient goes through a scratch buffer of the thread, sized once (a run's forward
+/// sensitivities call this every step).
 pub fn add_linear(
     energy: &dyn Energy,
     rod: &Rod,
@@ -44,12 +46,21 @@ pub fn add_linear(
             reason: "a derivative by a parameter needs its value finite and non-zero",
         });
     }
-    let mut gradient = vec![Vector3::zeros(); rod.len()];
-    energy.add_gradient(rod, &mut gradient);
-    for (o, g) in out.iter_mut().zip(&gradient) {
-        *o += g / value;
-    }
+    SCRATCH.with(|cell| {
+        let mut gradient = cell.borrow_mut();
+        gradient.clear();
+        gradient.resize(rod.len(), Vector3::zeros());
+        energy.add_gradient(rod, &mut gradient);
+        for (o, g) in out.iter_mut().zip(gradient.iter()) {
+            *o += g / value;
+        }
+    });
     Ok(true)
+}
+
+thread_local! {
+    /// [`add_linear`]'s gradient buffer.
+    static SCRATCH: std::cell::RefCell<Vec<Vector3<Real>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// [`Parameters`] for an energy with one parameter `$name` it is linear in, of value

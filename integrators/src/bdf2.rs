@@ -30,7 +30,11 @@
 //! insertion or removal: the old state is in another basis) or the rod's state is not
 //! bitwise the one this integrator left (someone else moved it, or a sub-step was
 //! rolled back).
+//!
+//! Its [`Forward`] form carries forward sensitivities through each step, the midpoint
+//! start included, with the two-step base's derivative ([`crate::forward`]).
 
+use crate::forward::{Forward, ForwardState, ForwardWork, ParameterRates, StepKind};
 use crate::incremental::{Increment, Stepper};
 use crate::midpoint::midpoint_step;
 use crate::newton::NewtonParams;
@@ -49,6 +53,7 @@ pub struct Bdf2 {
     pub params: NewtonParams,
     stepper: Stepper,
     history: History,
+    forward: ForwardWork,
 }
 
 /// The state one step back and the one this integrator left, to validate the history.
@@ -119,6 +124,10 @@ impl Bdf2 {
         }
         let beta = (1.0 + w) * scale * dt;
         let step = Increment { beta, reach: beta };
+        self.forward.kind = Some(StepKind::Bdf2 {
+            a: a * scale,
+            b: b * scale,
+        });
         s.solve(system, &self.params, step)
     }
 }
@@ -158,20 +167,40 @@ impl Integrator for Bdf2 {
     }
 
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
+        self.forward.kind = None;
         self.stepper.begin(system, dt)?;
         let result = if self.history.usable(system.rod(), dt) {
             self.bdf2_step(system, dt)
         } else {
+            self.forward.kind = Some(StepKind::Midpoint);
             midpoint_step(&mut self.stepper, system, &self.params, dt)
         };
         let result = self.stepper.finish(system, result);
         if result.is_ok() {
             self.history.record(&self.stepper, system.rod(), dt);
+        } else {
+            self.forward.kind = None;
         }
         result
     }
 
+    fn forward(&mut self) -> Option<&mut dyn Forward> {
+        Some(self)
+    }
+
     fn pin_forces(&self) -> Vec<Vector3<Real>> {
         self.stepper.pin_forces()
+    }
+}
+
+impl Forward for Bdf2 {
+    fn propagate(
+        &mut self,
+        system: &mut dyn System,
+        rates: &mut dyn ParameterRates,
+        states: &mut [ForwardState],
+    ) -> Result<StepStats, IntegratorError> {
+        let (stepper, work) = (&mut self.stepper, &mut self.forward);
+        crate::forward::propagate(stepper, work, &self.params, (system, rates), states)
     }
 }

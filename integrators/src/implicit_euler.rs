@@ -10,7 +10,11 @@
 //!
 //! This is the shared incremental problem ([`crate::incremental`]) with
 //! \\(\hat q = q_0\\), \\(\hat v = v_0\\) and β = ρ = h.
+//!
+//! Its [`Forward`] form carries forward sensitivities through each solved step
+//! ([`crate::forward`]).
 
+use crate::forward::{Forward, ForwardState, ForwardWork, ParameterRates, StepKind};
 use crate::incremental::{Increment, Stepper};
 use crate::lane_euler::LaneOutcome;
 use crate::newton::NewtonParams;
@@ -25,6 +29,7 @@ pub struct ImplicitEuler {
     pub params: NewtonParams,
     stepper: Stepper,
     preloaded: Preloaded,
+    forward: ForwardWork,
 }
 
 /// A step the batched form took ([`Batched::preload`]), waiting for the step it is.
@@ -86,6 +91,7 @@ impl Integrator for ImplicitEuler {
 
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
         // A preloaded step is used once, and only for the step it was taken as.
+        self.forward.kind = None;
         if std::mem::take(&mut self.preloaded.live) && self.preloaded.fits(system, dt) {
             let p = &mut self.preloaded;
             return self
@@ -98,7 +104,11 @@ impl Integrator for ImplicitEuler {
             reach: dt,
         };
         let result = self.stepper.solve(system, &self.params, step);
-        self.stepper.finish(system, result)
+        let result = self.stepper.finish(system, result);
+        if result.is_ok() {
+            self.forward.kind = Some(StepKind::Euler);
+        }
+        result
     }
 
     fn pin_forces(&self) -> Vec<Vector3<Real>> {
@@ -107,6 +117,22 @@ impl Integrator for ImplicitEuler {
 
     fn batched(&mut self) -> Option<&mut dyn Batched> {
         Some(self)
+    }
+
+    fn forward(&mut self) -> Option<&mut dyn Forward> {
+        Some(self)
+    }
+}
+
+impl Forward for ImplicitEuler {
+    fn propagate(
+        &mut self,
+        system: &mut dyn System,
+        rates: &mut dyn ParameterRates,
+        states: &mut [ForwardState],
+    ) -> Result<StepStats, IntegratorError> {
+        let (stepper, work) = (&mut self.stepper, &mut self.forward);
+        crate::forward::propagate(stepper, work, &self.params, (system, rates), states)
     }
 }
 

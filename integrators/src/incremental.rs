@@ -237,6 +237,10 @@ pub(crate) struct Stepper {
     alpha: DampingRates,
     /// β of the last solve (pin forces are multipliers / β).
     beta: Real,
+    /// The last solve's β and ρ (what a forward sensitivity step differentiates).
+    pub step: Option<Increment>,
+    /// The multipliers of the step, kept across a tangent solve.
+    saved_mu: Vec<Vector3<Real>>,
     /// Never factorise an indefinite matrix: every step descends to a minimum of the
     /// merit, never to a saddle (the static solver's continuation path needs this).
     pub definite_only: bool,
@@ -279,6 +283,7 @@ impl Stepper {
         step: Increment,
     ) -> Result<StepStats, IntegratorError> {
         self.beta = step.beta;
+        self.step = Some(step);
         if params.max_step.is_some() && step.beta > 0.0 {
             // Start from the current positions (not the predictor x = v₀), so that the
             // step limit governs the whole path from the start state.
@@ -334,9 +339,49 @@ impl Stepper {
         std::mem::swap(&mut rod.positions, &mut end.0);
         std::mem::swap(&mut rod.velocities, &mut end.1);
         self.beta = dt;
+        self.step = None;
         let forces = pin_forces.iter().map(|f| f * dt);
         self.workspace.set_multipliers(forces);
         Ok(stats)
+    }
+
+    /// `α_i`, the damping rate at control point `i` of the last step.
+    pub fn damping_at(&self, i: usize) -> Real {
+        self.alpha.at(i)
+    }
+
+    /// Solves the tangent problems `cases` ([`newton::tangents`]) with the Newton matrix
+    /// of the last solve at the applied iterate (the rod must hold it: positions
+    /// \(\hat q + \beta x\), velocities `x`); the step's multipliers (its pin forces)
+    /// are kept. An error if the last step was not solved here, or the matrix is not the
+    /// exact Hessian's.
+    pub fn tangents(
+        &mut self,
+        system: &dyn System,
+        params: &NewtonParams,
+        cases: &mut [newton::Tangent],
+    ) -> Result<StepStats, IntegratorError> {
+        let step = self.step.ok_or(IntegratorError::SolverState(
+            "forward sensitivities need the step solved by this integrator",
+        ))?;
+        let mut problem = IncrementalProblem {
+            base_q: &self.base_q,
+            base_v: &self.base_v,
+            step,
+            alpha: &self.alpha,
+            scratch: &mut self.scratch,
+            hessian: HessianKind::Exact,
+            definite_only: false,
+        };
+        self.saved_mu.clear();
+        self.saved_mu
+            .extend_from_slice(self.workspace.multipliers());
+        self.workspace.solver_kind(params.linear_solver, system);
+        let exact = |p: &dyn NewtonProblem| p.indefinite_allowed();
+        let stats = newton::tangents(&mut problem, system, &mut self.workspace, &exact, cases);
+        let mu = self.saved_mu.iter().copied();
+        self.workspace.set_multipliers(mu);
+        stats
     }
 
     /// Forces the pins exerted on the rod during the last step, N: the KKT multipliers

@@ -31,6 +31,8 @@ pub(crate) struct Constraints {
     schur: Vec<Real>,
     /// Scratch for the multipliers, 3k.
     sol: Vec<Real>,
+    /// The normal equations of [`Constraints::multipliers_of`], 3k × 3k row-major.
+    normal: Vec<Real>,
     /// Pins handled by the Schur complement (the others are eliminated).
     general: Vec<usize>,
     /// Pins eliminated from the system.
@@ -204,6 +206,68 @@ impl Constraints {
     /// iterate `x`, turns `flat` into `Δx` and writes every pin's multiplier `μ`.
     pub fn correct(&mut self, x: &[Vector3<Real>], flat: &mut [Real], mu: &mut [Vector3<Real>]) {
         self.correct_for(x, flat, mu, true);
+    }
+
+    /// The eliminated pins' multipliers again, after [`Self::correct`], from the final
+    /// step `flat` (changed since by the remainder's correction) and `rest`, per control
+    /// point the row's part besides the banded product: \\(r - a + sR\,\Delta x\\)
+    /// for the residual `r`, the augmentation's right-hand side `a` and the remainder's
+    /// product (the banded rows leave it out). The other pins' multipliers are kept.
+    pub fn remainder_multipliers(
+        &self,
+        flat: &[Real],
+        rest: &[Vector3<Real>],
+        mu: &mut [Vector3<Real>],
+    ) {
+        let rest = |_: usize, k: usize| rest[k];
+        self.points.multipliers_from(flat, &self.others, rest, mu);
+    }
+
+    /// Whether some pins go through the Schur complement (not at a control point).
+    pub fn has_schur_pins(&self) -> bool {
+        !self.general.is_empty()
+    }
+
+    /// Every pin's multiplier from \\(w = G^T\mu\\) (`r + A Δx` of a solved step, `A`
+    /// the whole matrix): the normal equations
+    /// \\((PG\,G^TP + I - P)\,\mu = PG\,w\\), 3k unknowns, solved densely.
+    pub fn multipliers_of(
+        &mut self,
+        w: &[Vector3<Real>],
+        mu: &mut [Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
+        let m = 3 * self.rows.len();
+        self.normal.clear();
+        self.normal.resize(m * m, 0.0);
+        for (p, a) in self.rows.iter().enumerate() {
+            for (q, b) in self.rows.iter().enumerate() {
+                let dot: Real = (0..a.order)
+                    .filter_map(|i| {
+                        let j = (a.first + i).checked_sub(b.first)?;
+                        (j < b.order).then(|| a.value[i] * b.value[j])
+                    })
+                    .sum();
+                let mut block = self.projectors[p] * self.projectors[q] * dot;
+                if p == q {
+                    block += Matrix3::identity() - self.projectors[p];
+                }
+                for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+                    self.normal[(3 * p + r) * m + 3 * q + c] = block[(r, c)];
+                }
+            }
+        }
+        self.sol.clear();
+        for (b, proj) in self.rows.iter().zip(&self.projectors) {
+            let g = proj * b.combine(&b.value, w);
+            self.sol.extend(g.iter().copied());
+        }
+        dense_cholesky(&mut self.normal, m)
+            .map_err(|()| IntegratorError::SolverState("the pins' rows are dependent"))?;
+        dense_cholesky_solve(&self.normal, m, &mut self.sol);
+        for (p, mu) in mu.iter_mut().enumerate().take(self.rows.len()) {
+            *mu = Vector3::new(self.sol[3 * p], self.sol[3 * p + 1], self.sol[3 * p + 2]);
+        }
+        Ok(())
     }
 
     /// Solves the KKT system with homogeneous constraints, `G Δx = 0`: `flat` holds the

@@ -36,6 +36,7 @@ mod cholesky_variants;
 pub mod conformance;
 pub mod convergence;
 mod error;
+pub mod forward;
 mod implicit_euler;
 mod incremental;
 mod kkt;
@@ -54,6 +55,7 @@ pub use banded_cholesky::BandedCholesky;
 pub use bdf2::Bdf2;
 pub use convergence::{ConvergenceTracker, NewtonVerdict};
 pub use error::IntegratorError;
+pub use forward::{Forward, ForwardState, ParameterRates};
 pub use implicit_euler::ImplicitEuler;
 pub use linear::LinearSolverKind;
 pub use midpoint::ImplicitMidpoint;
@@ -136,6 +138,12 @@ pub trait System: Send + Sync {
     /// Default: never.
     fn interrupted(&self) -> bool {
         false
+    }
+    /// The concrete system, for a caller's callback handed the system back (a forward
+    /// sensitivity's [`ParameterRates`] reads the facade's energies through it).
+    /// Default `None`.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
     }
 }
 
@@ -276,6 +284,11 @@ pub trait Integrator: Send + Sync {
     /// The scheme's [`Batched`] form, if the batched ensemble step can take its steps
     /// ([`lane_euler`]). Default `None`: the scheme has no batched form.
     fn batched(&mut self) -> Option<&mut dyn Batched> {
+        None
+    }
+    /// The scheme's [`Forward`] form, if it can carry forward sensitivities through its
+    /// steps ([`forward`]: implicit Euler and BDF2). Default `None`.
+    fn forward(&mut self) -> Option<&mut dyn Forward> {
         None
     }
     /// Appends what the scheme keeps between steps (a multistep scheme's history), for a

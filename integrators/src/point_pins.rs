@@ -242,10 +242,23 @@ impl PointPins {
     /// Multipliers of the eliminated pins from the solved step `dx` (flat) and `others[e]`
     /// \(= (G^T\mu)_k\) of the remaining pins at each eliminated control point.
     pub fn multipliers(&self, dx: &[Real], others: &[Vector3<Real>], mu: &mut [Vector3<Real>]) {
+        self.multipliers_from(dx, others, |e, _| -self.rhs[e], mu);
+    }
+
+    /// [`Self::multipliers`] with each row's part other than the banded product given by
+    /// `rest(e, k)` for pin `e` at control point `k` (instead of the saved right-hand
+    /// side), e.g. with a remainder's product added.
+    pub fn multipliers_from(
+        &self,
+        dx: &[Real],
+        others: &[Vector3<Real>],
+        rest: impl Fn(usize, usize) -> Vector3<Real>,
+        mu: &mut [Vector3<Real>],
+    ) {
         let (bw, n) = (self.bandwidth, dx.len() / 3);
         let width = 2 * bw + 1;
         for (e, &(p, k)) in self.pins.iter().enumerate() {
-            let mut row = -self.rhs[e] - others[e];
+            let mut row = rest(e, k) - others[e];
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
                 // A_kj = A_jkᵀ.
                 row += self.saved[e * width + j + bw - k].tr_mul(&flat3(dx, j));

@@ -68,14 +68,15 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
-    /// Exact sensitivities of a static scene's equilibrium to scalar parameters: the
+    /// Exact sensitivities of a static scene's equilibrium, or of an implicit Euler or
+    /// BDF2 run (at its end and every recorded time), to scalar parameters: the
     /// derivatives of the output samples' positions (#48).
     Sensitivities {
-        /// The scene (`method = "static"`).
+        /// The scene (`method = "static"`, `"implicit-euler"` or `"bdf2"`).
         scene: PathBuf,
         /// Parameters by scene path, comma-separated: rod.stretch_stiffness,
-        /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rods[k].…,
-        /// world.gravity[c], loads[i].force[c].
+        /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rod.damping
+        /// (runs), rods[k].…, world.gravity[c], loads[i].force[c].
         #[arg(long, value_name = "P1,P2,…")]
         params: String,
         /// Where to write the sensitivities as JSON.
@@ -251,16 +252,30 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
             json,
         } => {
             let params: Vec<&str> = params.split(',').map(str::trim).collect();
-            let found = splinerod::sensitivity::static_sensitivities(
-                &splinerod::Scene::load(&scene)?,
-                &params,
-            )?;
-            for line in found.summary() {
+            let scene = splinerod::Scene::load(&scene)?;
+            let (summary, found) = sensitivities(&scene, &params)?;
+            for line in summary {
                 say!("{line}");
             }
-            json.map_or(Ok(()), |path| write_json(&path, &found.json()))?;
+            json.map_or(Ok(()), |path| write_json(&path, &found))?;
             Ok(ExitCode::SUCCESS)
         }
+    }
+}
+
+/// `splinerod sensitivities`: a static scene's equilibrium's, or a run's (implicit
+/// Euler, BDF2) at its end and every recorded time; the summary lines and the JSON.
+fn sensitivities(
+    scene: &splinerod::Scene,
+    params: &[&str],
+) -> Result<(Vec<String>, serde_json::Value), Error> {
+    use splinerod::sensitivity::{dynamic_sensitivities, static_sensitivities};
+    if scene.solver.method == splinerod::scene::Method::Static {
+        let found = static_sensitivities(scene, params)?;
+        Ok((found.summary(), found.json()))
+    } else {
+        let found = dynamic_sensitivities(scene, params)?;
+        Ok((found.summary(), found.json()))
     }
 }
 

@@ -369,6 +369,9 @@ impl System for RodSystem {
     fn rod(&self) -> &Rod {
         &self.rod
     }
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn rod_mut(&mut self) -> &mut Rod {
         &mut self.rod
     }

@@ -178,6 +178,10 @@ pub struct NewtonWorkspace {
     /// Largest entry of the solve's first step from the banded matrix (unknowns' units),
     /// which bounds the correction's floor from above ([`MOTION_FRACTION`]).
     motion: Option<Real>,
+    /// Zeros, the iterate of the tangent solves ([`tangents`]).
+    origin: Vec<Vector3<Real>>,
+    /// The problem's matrix, unfactorised, for the tangent solves' multipliers.
+    spare: BlockBanded,
 }
 
 impl NewtonWorkspace {
@@ -205,7 +209,7 @@ impl NewtonWorkspace {
     }
 
     fn resize(&mut self, n: usize, pins: usize) {
-        for v in [&mut self.r, &mut self.base, &mut self.dx] {
+        for v in [&mut self.r, &mut self.base, &mut self.dx, &mut self.origin] {
             v.resize(n, Vector3::zeros());
         }
         self.flat.resize(3 * n, 0.0);

@@ -52,7 +52,26 @@ pub fn tangents(
             context: "the exact Hessian at the equilibrium, for sensitivities",
         });
     }
-    let zeros = vec![Vector3::zeros(); n];
+    let zeros = std::mem::take(&mut ws.origin);
+    let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
+    ws.origin = zeros;
+    solved.map(|()| stats)
+}
+
+/// Solves each case with the factorised matrix, from the iterate `zeros`.
+fn solve_cases(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    zeros: &[Vector3<Real>],
+    cases: &mut [Tangent],
+    stats: &mut StepStats,
+) -> Result<(), IntegratorError> {
+    let n = zeros.len();
+    let remainder = remainder_kind(problem, system, ws);
+    if remainder == Remainder::AllPins {
+        problem.matrix(system, &mut ws.spare);
+    }
     for case in cases.iter_mut() {
         let pins = system.pins().len();
         if case.residual_rate.len() != n || case.target_rates.len() != pins {
@@ -66,9 +85,82 @@ pub fn tangents(
         ws.constraints.targets.clone_from(&case.target_rates);
         ws.floor = 0.0;
         ws.motion = None;
-        solve_factored(problem, system, &zeros, ws, &mut stats)?;
+        solve_factored(problem, system, zeros, ws, stats)?;
+        match remainder {
+            Remainder::None => {}
+            Remainder::PointPins => remainder_multipliers(problem, system, ws, zeros),
+            Remainder::AllPins => all_multipliers(problem, system, ws)?,
+        }
         case.positions.clone_from(&ws.dx);
         case.multipliers.clone_from(&ws.multipliers);
     }
-    Ok(stats)
+    Ok(())
+}
+
+/// After a solve with the remainder's correction: the eliminated pins' multipliers
+/// from the final step, their rows completed by the remainder's product
+/// \\(sR\, \dot x\\) (a Newton step's multipliers need not: its step vanishes at
+/// convergence, a tangent's does not). For pins only at control points (the common
+/// case: no extra assembly); a closed rod's Schur pins keep the banded step's.
+fn remainder_multipliers(
+    problem: &dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+    zeros: &[Vector3<Real>],
+) {
+    // The row's rest: r − a (a = ρGᵀc, the augmentation's right-hand side at x = 0)
+    // plus sR ẋ.
+    let rho = problem.augmentation();
+    ws.base.iter_mut().for_each(|b| *b = Vector3::zeros());
+    ws.constraints.add_gram_rhs(rho, zeros, &mut ws.base);
+    for (b, r) in ws.base.iter_mut().zip(&ws.r) {
+        *b = r - *b;
+    }
+    let scale = problem.hessian_scale();
+    system.add_hessian_remainder(&ws.dx, scale, &mut ws.base);
+    ws.constraints
+        .remainder_multipliers(&ws.flat, &ws.base, &mut ws.multipliers);
+}
+
+/// How the multipliers of a tangent solve are completed for the Hessian remainder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Remainder {
+    /// No remainder's correction ran: the solve's multipliers are exact.
+    None,
+    /// Every pin is eliminated: their rows, completed ([`remainder_multipliers`]).
+    PointPins,
+    /// Some pins go through the Schur complement: all from the whole matrix
+    /// ([`all_multipliers`]).
+    AllPins,
+}
+
+/// Which [`Remainder`] case the solves of `problem` are.
+fn remainder_kind(
+    problem: &dyn NewtonProblem,
+    system: &dyn System,
+    ws: &NewtonWorkspace,
+) -> Remainder {
+    let corrected = problem.hessian_scale() > 0.0 && !ws.solver.is_indefinite();
+    if !(corrected && system.has_hessian_remainder()) {
+        Remainder::None
+    } else if ws.constraints.has_schur_pins() && !system.rod().is_closed() {
+        Remainder::AllPins
+    } else {
+        Remainder::PointPins
+    }
+}
+
+/// Every pin's multiplier from \\(w = r + (A + sR)\,\dot x = G^T\mu\\), with `A` the
+/// problem's matrix (assembled unfactorised in `ws.spare`) and the remainder's product.
+fn all_multipliers(
+    problem: &dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+) -> Result<(), IntegratorError> {
+    ws.spare.mul_vec(&ws.dx, &mut ws.base);
+    for (b, r) in ws.base.iter_mut().zip(&ws.r) {
+        *b += r;
+    }
+    system.add_hessian_remainder(&ws.dx, problem.hessian_scale(), &mut ws.base);
+    ws.constraints.multipliers_of(&ws.base, &mut ws.multipliers)
 }
