@@ -446,8 +446,5 @@ fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
 /// The value of the parameter at scene path `path` (as [`set_parameter`] names it) in
 /// `scene`.
 pub fn parameter_value(scene: &Scene, path: &str) -> Result<Real, Error> {
-    Ok(match target(scene, path)? {
-        Target::Load(i, c) => scene.loads[i].force.map_or(0.0, |f| f[c]),
-        Target::Energy(name, segment) => value(scene, name, segment),
-    })
+    Ok(target_value(scene, &target(scene, path)?))
 }
