@@ -26,7 +26,10 @@
 
 mod dynamic;
 
-pub use dynamic::{dynamic_sensitivities, DynamicSensitivities, TimeSensitivities};
+pub use dynamic::{
+    dynamic_sensitivities, observed_sensitivities, DynamicSensitivities, StepObserver,
+    TimeSensitivities,
+};
 
 use crate::{Error, RodSystem, Scene};
 use nalgebra::Vector3;

@@ -39,23 +39,6 @@ fn markers() -> ObservationFile {
     ObservationFile::parse("markers.csv", &csv).expect("markers")
 }
 
-/// Every fitted parameter within 2 % of its true value and within 3 reported σ.
-fn recovered(report: &splinerod::fit::FitReport, params: &[&str], truths: &[Real]) {
-    for (k, &truth) in truths.iter().enumerate() {
-        let (p, s) = (report.parameters[k], report.std[k]);
-        assert!(
-            (p / truth - 1.0).abs() < 0.02,
-            "{}: {p} vs {truth}",
-            params[k]
-        );
-        assert!(
-            (p - truth).abs() < 3.0 * s,
-            "{}: {p} vs {truth} ± {s}",
-            params[k]
-        );
-    }
-}
-
 #[test]
 fn ea_and_ei_are_recovered_from_noisy_markers() {
     let files = [markers()];
@@ -67,7 +50,7 @@ fn ea_and_ei_are_recovered_from_noisy_markers() {
         .expect("fitted");
     println!("{report:?}");
     assert!(report.converged);
-    recovered(&report, &params, &[50.0, 1e-3]);
+    common::recovered(&report, &params, &[50.0, 1e-3]);
     assert!(
         (report.residual_rms - 1.0).abs() < 0.3,
         "residuals in units of σ: {}",
@@ -230,7 +213,7 @@ fn the_measured_clamp_force_separates_the_density() {
         "{:?}",
         report.unidentifiable
     );
-    recovered(&report, &params, &[50.0, 1e-3, 0.1]);
+    common::recovered(&report, &params, &[50.0, 1e-3, 0.1]);
 }
 
 #[test]

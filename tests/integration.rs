@@ -33,6 +33,7 @@ mod cutting;
 mod driven;
 mod ensemble;
 mod fit_least_squares;
+mod fit_run;
 mod fit_scene;
 mod friction;
 mod fuzz_scenes;

@@ -83,7 +83,7 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Fits scene parameters to observed markers and pin forces (static scenes).
+    /// Fits scene parameters to observations (static scenes; markers of runs).
     Fit {
         /// The scene (`method = "static"`), its values the fit's start.
         scene: PathBuf,

@@ -6,8 +6,10 @@
 //! `unidentifiable`: the groups of parameters the observations cannot separate, by
 //! name, with the direction in the fitted variables that they do not see).
 
+use crate::fit::run_fit::RunFit;
 use crate::fit::scene_out::with_fitted_values;
 use crate::fit::{FitReport, ObservationFile, SceneFit};
+use crate::scene::Method;
 use crate::{Error, Scene};
 use std::path::{Path, PathBuf};
 
@@ -39,7 +41,10 @@ pub fn fit_scene(
     files: &[ObservationFile],
     names: &[&str],
 ) -> Result<NamedFit, Error> {
-    let report = SceneFit::new(scene, names, files)?.fit()?;
+    let report = match scene.solver.method {
+        Method::Static => SceneFit::new(scene, names, files)?.fit()?,
+        _ => RunFit::from_files(scene, names, files)?.fit()?,
+    };
     Ok(NamedFit {
         names: names.iter().map(|s| s.to_string()).collect(),
         report,

@@ -9,20 +9,45 @@
 //! (`t,pin,fx,fy,fz`: the force `[[pins]]` entry `pin` exerts on the rod, as the run's
 //! `pin_forces`; residual \\((F_{obs} - F(p))/\sigma\\) with the multipliers'
 //! derivative), and unlabelled points (`t,x,y,z`: residual the distance to the curve's
-//! nearest point over σ, [`crate::fit::closest`]). Trajectories need dynamic
-//! sensitivities: a dynamic scene is refused by the sensitivities, naming it.
+//! nearest point over σ, [`crate::fit::closest`]). A run observed along its trajectory
+//! is fitted by [`crate::fit::run_fit`].
 
 use crate::fit::closest::closest_point;
 use crate::fit::gradient_free::{nelder_mead, GradientFreeFit};
 use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
 use crate::fit::observations::{ObservationFile, ObservationKind};
-use crate::sensitivity::{set_parameter, static_sensitivities};
+use crate::sensitivity::{parameter_value, set_parameter, static_sensitivities};
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
 
 /// Model evaluations a fit may use, per parameter.
-const SIMULATIONS_PER_PARAMETER: usize = 40;
+pub const SIMULATIONS_PER_PARAMETER: usize = 40;
+
+/// The values of the parameters `paths` in `scene` (where a fit starts), and how each
+/// is fitted: stiffnesses, densities and a positive damping in log space, the others
+/// as they are.
+pub fn start_and_spaces(
+    scene: &Scene,
+    paths: &[&str],
+) -> Result<(Vec<Real>, Vec<ParameterSpace>), Error> {
+    let start = paths
+        .iter()
+        .map(|p| parameter_value(scene, p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let spaces = paths
+        .iter()
+        .zip(&start)
+        .map(|(p, &v)| ParameterSpace {
+            log: v > 0.0
+                && (p.ends_with("stiffness")
+                    || p.ends_with("linear_density")
+                    || p.ends_with("damping")),
+            bounds: None,
+        })
+        .collect();
+    Ok((start, spaces))
+}
 
 /// A static scene observed by markers.
 pub struct SceneFit<'a> {
@@ -78,7 +103,7 @@ impl<'a> SceneFit<'a> {
     /// Fits from the scene's own values: stiffnesses and densities in log space, the
     /// other parameters as they are.
     pub fn fit(&mut self) -> Result<FitReport, Error> {
-        let (start, spaces) = self.start()?;
+        let (start, spaces) = start_and_spaces(&self.origin, &self.paths)?;
         let budget = SIMULATIONS_PER_PARAMETER * self.paths.len();
         fit(self, &start, &spaces, budget)
     }
@@ -91,23 +116,8 @@ impl<'a> SceneFit<'a> {
         target_rms: Real,
         max_simulations: usize,
     ) -> Result<GradientFreeFit, Error> {
-        let (start, spaces) = self.start()?;
+        let (start, spaces) = start_and_spaces(&self.origin, &self.paths)?;
         nelder_mead(self, &start, &spaces, target_rms, max_simulations)
-    }
-
-    /// The scene's values of the fitted parameters, and how each is fitted.
-    fn start(&self) -> Result<(Vec<Real>, Vec<ParameterSpace>), Error> {
-        let found = static_sensitivities(&self.origin, &self.paths)?;
-        let start = found.parameters.iter().map(|p| p.1).collect();
-        let spaces = self
-            .paths
-            .iter()
-            .map(|p| ParameterSpace {
-                log: p.ends_with("stiffness") || p.ends_with("linear_density"),
-                bounds: None,
-            })
-            .collect();
-        Ok((start, spaces))
     }
 }
 

@@ -139,6 +139,21 @@ impl DynamicSensitivities {
 /// The run of the dynamic `scene` and its forward sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn dynamic_sensitivities(scene: &Scene, paths: &[&str]) -> Result<DynamicSensitivities, Error> {
+    observed_sensitivities(scene, paths, &mut |_, _, _| Ok(()))
+}
+
+/// What sees a run after each of its steps: the time, the rod, and per parameter the
+/// forward state (the derivatives of its control points and velocities). An error
+/// stops the run.
+pub type StepObserver<'a> = dyn FnMut(Real, &Rod, &[ForwardState]) -> Result<(), Error> + 'a;
+
+/// [`dynamic_sensitivities`], calling `observe` after every step (a fit reads its
+/// observations there, at any material coordinate).
+pub fn observed_sensitivities(
+    scene: &Scene,
+    paths: &[&str],
+    observe: &mut StepObserver<'_>,
+) -> Result<DynamicSensitivities, Error> {
     refuse(scene)?;
     let targets: Vec<Target> = paths
         .iter()
@@ -155,6 +170,7 @@ pub fn dynamic_sensitivities(scene: &Scene, paths: &[&str]) -> Result<DynamicSen
     let mut times = Vec::with_capacity(scene.step_count());
     for step in 0..scene.step_count() {
         one_step(&mut sim, dt, step, &mut rates, &mut states)?;
+        observe(sim.time, &sim.system.rod, &states)?;
         times.push(TimeSensitivities {
             t: sim.time,
             positions: states.iter().map(|d| point(&rows, &d.positions)).collect(),

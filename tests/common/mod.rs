@@ -146,3 +146,20 @@ pub fn noise(i: usize) -> splinerod::Real {
     }
     sum - 6.0
 }
+
+/// Every fitted parameter within 2 % of its true value and within 3 reported σ.
+pub fn recovered(report: &splinerod::fit::FitReport, params: &[&str], truths: &[splinerod::Real]) {
+    for (k, &truth) in truths.iter().enumerate() {
+        let (p, s) = (report.parameters[k], report.std[k]);
+        assert!(
+            (p / truth - 1.0).abs() < 0.02,
+            "{}: {p} vs {truth}",
+            params[k]
+        );
+        assert!(
+            (p - truth).abs() < 3.0 * s,
+            "{}: {p} vs {truth} ± {s}",
+            params[k]
+        );
+    }
+}
