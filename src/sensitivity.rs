@@ -451,3 +451,15 @@ fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
 pub fn parameter_value(scene: &Scene, path: &str) -> Result<Real, Error> {
     Ok(target_value(scene, &target(scene, path)?))
 }
+
+/// `splinerod sensitivities`: a static scene's equilibrium's, or a run's (implicit
+/// Euler, BDF2) at its end and every recorded time; the summary lines and the JSON.
+pub fn report(scene: &Scene, params: &[&str]) -> Result<(Vec<String>, serde_json::Value), Error> {
+    if scene.solver.method == crate::scene::Method::Static {
+        let found = static_sensitivities(scene, params)?;
+        Ok((found.summary(), found.json()))
+    } else {
+        let found = dynamic_sensitivities(scene, params)?;
+        Ok((found.summary(), found.json()))
+    }
+}

@@ -85,7 +85,7 @@ enum Command {
     },
     /// Fits scene parameters to observations (static scenes; markers of runs).
     Fit {
-        /// The scene (`method = "static"`), its values the fit's start.
+        /// The scene (static, or an implicit Euler or BDF2 run), its values the start.
         scene: PathBuf,
         /// Observation files (CSV t,s,x,y,z; t,x,y,z; t,pin,fx,fy,fz; optional sigma); repeatable.
         #[arg(long, required = true)]
@@ -253,29 +253,13 @@ fn execute(cli: Cli) -> Result<ExitCode, Error> {
         } => {
             let params: Vec<&str> = params.split(',').map(str::trim).collect();
             let scene = splinerod::Scene::load(&scene)?;
-            let (summary, found) = sensitivities(&scene, &params)?;
+            let (summary, found) = splinerod::sensitivity::report(&scene, &params)?;
             for line in summary {
                 say!("{line}");
             }
             json.map_or(Ok(()), |path| write_json(&path, &found))?;
             Ok(ExitCode::SUCCESS)
         }
-    }
-}
-
-/// `splinerod sensitivities`: a static scene's equilibrium's, or a run's (implicit
-/// Euler, BDF2) at its end and every recorded time; the summary lines and the JSON.
-fn sensitivities(
-    scene: &splinerod::Scene,
-    params: &[&str],
-) -> Result<(Vec<String>, serde_json::Value), Error> {
-    use splinerod::sensitivity::{dynamic_sensitivities, static_sensitivities};
-    if scene.solver.method == splinerod::scene::Method::Static {
-        let found = static_sensitivities(scene, params)?;
-        Ok((found.summary(), found.json()))
-    } else {
-        let found = dynamic_sensitivities(scene, params)?;
-        Ok((found.summary(), found.json()))
     }
 }
 
