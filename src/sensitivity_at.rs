@@ -4,12 +4,15 @@
 //! samples ([`crate::sensitivity`] computes them at those): with the derivatives of
 //! the control points `dq/dp` from the same solve,
 //! \\(\mathrm{d}C(s)/\mathrm{d}p = \sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p\\).
-//! Python's `Simulation.sensitivities(params, s)` is this.
+//! Python's `Simulation.sensitivities(params, s)` is this; for a run (implicit Euler,
+//! BDF2), [`run_sensitivities_at`] gives them after every step from the forward
+//! sensitivities (`Simulation.sensitivity_history`), the last of them at the end.
 
-use crate::sensitivity::{static_sensitivities, StaticSensitivities};
+use crate::sensitivity::{observed_sensitivities, static_sensitivities, StaticSensitivities};
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
+use splinerod_integrators::ForwardState;
 
 /// The sensitivities of a static scene's equilibrium at chosen material coordinates.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,6 +73,63 @@ pub fn evaluate_at(
             .map(|d| point(d))
             .collect(),
         at: point(&rod.positions),
+    })
+}
+
+/// The sensitivities of a run at chosen material coordinates, after every step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSensitivitiesAt {
+    /// The parameters, by scene path, with their values.
+    pub parameters: Vec<(String, Real)>,
+    /// The material coordinates asked for, m.
+    pub s: Vec<Real>,
+    /// The time at the end of each step, s.
+    pub times: Vec<Real>,
+    /// Per step, per parameter, the derivative of the point at each coordinate.
+    pub positions: Vec<Vec<Vec<[Real; 3]>>>,
+    /// Per step, the point at each coordinate, m.
+    pub at: Vec<Vec<[Real; 3]>>,
+}
+
+/// The run of the dynamic `scene` (implicit Euler or BDF2, what
+/// [`crate::sensitivity::dynamic_sensitivities`] accepts) and, after every step, the
+/// derivatives of its points at the material coordinates `s` (m) with respect to the
+/// parameters `paths`.
+pub fn run_sensitivities_at(
+    scene: &Scene,
+    paths: &[&str],
+    s: &[Real],
+) -> Result<RunSensitivitiesAt, Error> {
+    let rod = (
+        scene.material_coordinate(0.0),
+        scene.material_coordinate(1.0),
+    );
+    check_coordinates(s, rod)?;
+    let (mut times, mut positions, mut at) = (Vec::new(), Vec::new(), Vec::new());
+    let mut rows = Vec::new();
+    let mut observe = |t: Real, rod: &splinerod_core::Rod, states: &[ForwardState]| {
+        if rows.is_empty() {
+            // The basis is fixed through a differentiated run: the rows once.
+            rows = s
+                .iter()
+                .map(|&x| rod.basis_at(x))
+                .collect::<Result<_, _>>()?;
+        }
+        let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
+            rows.iter().map(|b| b.combine(&b.value, q).into()).collect()
+        };
+        times.push(t);
+        positions.push(states.iter().map(|d| point(&d.positions)).collect());
+        at.push(point(&rod.positions));
+        Ok(())
+    };
+    let found = observed_sensitivities(scene, paths, &mut observe)?;
+    Ok(RunSensitivitiesAt {
+        parameters: found.parameters,
+        s: s.to_vec(),
+        times,
+        positions,
+        at,
     })
 }
 

@@ -1,7 +1,7 @@
 """Type stubs of the compiled module `splinerod._splinerod` (re-exported by `splinerod`)."""
 
 import os
-from typing import Any, Callable, Dict, Optional, Sequence, Union, final, overload
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -106,8 +106,14 @@ class Simulation:
     def positions(self, s: _ArrayLike, member: int = 0) -> _Points: ...
     def tension(self, s: _ArrayLike, member: int = 0) -> _Points: ...
     def sensitivities(self, params: Union[str, Sequence[str]], s: _ArrayLike) -> _Points:
-        """Derivatives (len(params), len(s), 3) of a static scene's equilibrium points at
-        material coordinates `s` (m) with respect to the scene paths `params`."""
+        """Derivatives (len(params), len(s), 3) of the points at material coordinates `s`
+        (m) with respect to the scene paths `params`: a static scene's equilibrium, or
+        the end of an implicit Euler or BDF2 run."""
+    def sensitivity_history(
+        self, params: Union[str, Sequence[str]], s: _ArrayLike
+    ) -> Tuple[_Points, _Points]:
+        """A run's times (T,) and derivatives (T, len(params), len(s), 3) of its points at
+        material coordinates `s` (m), after every step."""
     def energies(self, member: int = 0) -> Dict[str, float]: ...
     def stacked_positions(self, s: _ArrayLike) -> _Points: ...
     def stacked_control_points(self) -> _Points: ...

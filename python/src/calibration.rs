@@ -3,26 +3,83 @@
 //! and the fit of a scene's parameters to observations (`splinerod.fit`, wrapping
 //! [`fit_json`] into a `FitResult`).
 
-use crate::arrays::{stacked_points, values_from};
+use crate::arrays::{stacked_points, values_array, values_from};
 use crate::driver::Driver;
 use crate::errors::{scene_error, shield, IntoPyResult};
 use crate::scene::Scene;
 use nalgebra::Vector3;
-use numpy::PyArray3;
+use numpy::ndarray::Array4;
+use numpy::{IntoPyArray, PyArray1, PyArray3, PyArray4};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 use splinerod::fit::ObservationFile;
-use splinerod::Real;
+use splinerod::scene::Method;
+use splinerod::{sensitivity_at, Real};
 
-/// The derivatives `(len(params), len(s), 3)` of the equilibrium's points at material
-/// coordinates `s` (m) of the scene `driver` runs, with respect to the scene paths
-/// `params`; `SceneError` (a `ValueError`) naming an unknown parameter, a coordinate off
-/// the rod, a simulation built in code or a scene that is not static.
+/// The derivatives `(len(params), len(s), 3)` of the points at material coordinates
+/// `s` (m) of the scene `driver` runs — its equilibrium's for a static scene, the end
+/// of its run for implicit Euler or BDF2 — with respect to the scene paths `params`;
+/// `SceneError` (a `ValueError`) naming an unknown parameter, a coordinate off the rod,
+/// a simulation built in code or a scheme without sensitivities.
 pub fn sensitivities<'py>(
     driver: &Driver,
     params: &Bound<'py, PyAny>,
     s: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray3<Real>>> {
+    let py = s.py();
+    let (scene, paths, values) = request(driver, params, s)?;
+    let paths: Vec<&str> = paths.iter().map(String::as_str).collect();
+    let positions = if scene.solver.method == Method::Static {
+        let found = shield(|| {
+            let at = py.detach(|| sensitivity_at::static_sensitivities_at(scene, &paths, &values));
+            at.py_err(py)
+        })?;
+        found.positions
+    } else {
+        let found = run_history(py, scene, &paths, &values)?;
+        found.positions.into_iter().last().unwrap_or_default()
+    };
+    let members: Vec<Vec<Vector3<Real>>> = positions
+        .iter()
+        .map(|d| d.iter().map(|p| Vector3::from(*p)).collect())
+        .collect();
+    Ok(stacked_points(py, &members))
+}
+
+/// A run's times and its derivatives after every step (numpy arrays).
+pub type History<'py> = (Bound<'py, PyArray1<Real>>, Bound<'py, PyArray4<Real>>);
+
+/// A run's derivatives after every step: the times `(T,)` and the derivatives
+/// `(T, len(params), len(s), 3)` of its points at material coordinates `s` (m); errors
+/// as [`sensitivities`], and a static scene's (it has no steps).
+pub fn sensitivity_history<'py>(
+    driver: &Driver,
+    params: &Bound<'py, PyAny>,
+    s: &Bound<'py, PyAny>,
+) -> PyResult<History<'py>> {
+    let py = s.py();
+    let (scene, paths, values) = request(driver, params, s)?;
+    let paths: Vec<&str> = paths.iter().map(String::as_str).collect();
+    let found = run_history(py, scene, &paths, &values)?;
+    let shape = (found.times.len(), paths.len(), values.len(), 3);
+    let flat: Vec<Real> = found
+        .positions
+        .iter()
+        .flatten()
+        .flatten()
+        .flatten()
+        .copied()
+        .collect();
+    let history = Array4::from_shape_vec(shape, flat).unwrap_or_default();
+    Ok((values_array(py, found.times), history.into_pyarray(py)))
+}
+
+/// The scene, parameter names and coordinates of a sensitivities request.
+fn request<'a>(
+    driver: &'a Driver,
+    params: &Bound<'_, PyAny>,
+    s: &Bound<'_, PyAny>,
+) -> PyResult<(&'a splinerod::Scene, Vec<String>, Vec<Real>)> {
     let py = s.py();
     let names = names_from(params)?;
     let (values, _) = values_from(s, "s")?;
@@ -31,19 +88,20 @@ pub fn sensitivities<'py>(
                        built in code";
         return Err(scene_error(py, None, message));
     };
-    let scene = run.scene();
-    let paths: Vec<&str> = names.iter().map(String::as_str).collect();
-    let found = shield(|| {
-        let at = py
-            .detach(|| splinerod::sensitivity_at::static_sensitivities_at(scene, &paths, &values));
-        at.py_err(py)
-    })?;
-    let members: Vec<Vec<Vector3<Real>>> = found
-        .positions
-        .iter()
-        .map(|d| d.iter().map(|p| Vector3::from(*p)).collect())
-        .collect();
-    Ok(stacked_points(py, &members))
+    Ok((run.scene(), names, values))
+}
+
+/// The run of `scene` with its derivatives at `values` after every step.
+fn run_history(
+    py: Python<'_>,
+    scene: &splinerod::Scene,
+    paths: &[&str],
+    values: &[Real],
+) -> PyResult<sensitivity_at::RunSensitivitiesAt> {
+    shield(|| {
+        let found = py.detach(|| sensitivity_at::run_sensitivities_at(scene, paths, values));
+        found.py_err(py)
+    })
 }
 
 /// Parameter names: a list of strings, or one string of comma-separated names;

@@ -378,15 +378,23 @@ impl Simulation {
         Ok(values_array(py, tension))
     }
 
-    /// Derivatives `(len(params), len(s), 3)` of a static scene's equilibrium points at
-    /// material coordinates `s` (m) with respect to the scene paths `params`
-    /// (`rod.bending_stiffness`, `world.gravity[1]`, ...): solved anew from the scene.
+    /// Derivatives `(len(params), len(s), 3)` at material coordinates `s` (m) by scene
+    /// paths `params`: a static scene's equilibrium, or a run's end, solved anew.
     fn sensitivities<'py>(
         &self,
         params: &Bound<'py, PyAny>,
         s: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray3<Real>>> {
         crate::calibration::sensitivities(&self.driver, params, s)
+    }
+
+    /// A run's times `(T,)` and derivatives `(T, len(params), len(s), 3)` at `s` (m).
+    fn sensitivity_history<'py>(
+        &self,
+        params: &Bound<'py, PyAny>,
+        s: &Bound<'py, PyAny>,
+    ) -> PyResult<crate::calibration::History<'py>> {
+        crate::calibration::sensitivity_history(&self.driver, params, s)
     }
 
     /// Energies of `member`, J: `kinetic` and one entry per energy term.

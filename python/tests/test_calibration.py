@@ -1,5 +1,5 @@
-"""Calibration from Python (issue #48): a static scene's sensitivities against central
-finite differences of two solves, and the fit of EA and EI of a clamped cable hanging
+"""Calibration from Python (issue #48): a static scene's and a run's sensitivities
+against central finite differences of two solves or runs, and the fit of EA and EI of a clamped cable hanging
 under gravity from 40 noisy markers (sigma = 0.1 mm)."""
 
 import numpy as np
@@ -73,11 +73,40 @@ def test_sensitivities_name_an_unknown_parameter():
         sim.sensitivities(PARAMS, [1.5])
 
 
-def test_sensitivities_need_a_static_scene():
-    scene = cable()
-    scene["solver"] = {"method": "implicit-euler", "dt": 0.01, "duration": 0.1}
-    with pytest.raises(ValueError, match="static"):
+def swinging(damping=0.3, ei=5e-3, method="implicit-euler"):
+    """A cable pinned at s = 0 released horizontally, swinging for 0.5 s, as a dict."""
+    scene = cable(ei=ei)
+    scene["rod"].update(stretch_stiffness=200.0, damping=damping, control_points=12)
+    scene["pins"] = [{"at": 0.0}]
+    scene["solver"] = {"method": method, "dt": 0.01, "duration": 0.5, "tolerance": 1e-13}
+    return scene
+
+
+def test_a_runs_sensitivities_match_differences_of_runs():
+    params = ["rod.damping", "rod.bending_stiffness"]
+    s = np.array([0.25, 0.5, 1.0])
+    sim = splinerod.Scene(swinging()).simulation()
+    times, history = sim.sensitivity_history(params, s)
+    assert history.shape == (len(times), 2, 3, 3)
+    assert abs(times[-1] - 0.5) < 1e-9
+    end = sim.sensitivities(params, s)
+    assert np.array_equal(end, history[-1])
+    for k, (key, value) in enumerate([("damping", 0.3), ("bending_stiffness", 5e-3)]):
+        h = 1e-4 * value
+        up, down = swinging(), swinging()
+        up["rod"][key] = value + h
+        down["rod"][key] = value - h
+        fd = (equilibrium(up, s) - equilibrium(down, s)) / (2 * h)
+        error = np.abs(end[k] - fd).max() / np.abs(fd).max()
+        assert error <= 1e-5, f"{key}: relative error {error:.2e}"
+
+
+def test_sensitivities_refuse_a_scheme_without_them():
+    scene = swinging(method="implicit-midpoint")
+    with pytest.raises(ValueError, match="solver.method"):
         splinerod.Scene(scene).simulation().sensitivities(PARAMS, [0.5])
+    with pytest.raises(ValueError, match="solver.method"):
+        splinerod.Scene(scene).simulation().sensitivity_history(PARAMS, [0.5])
 
 
 def test_fit_recovers_ea_and_ei_from_noisy_markers():
