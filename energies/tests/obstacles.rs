@@ -1,5 +1,5 @@
 //! Rigid obstacles of the contact energy: a plane obstacle equals the floor, gradients
-//! against finite differences, a definite Hessian, the distance functions, validation.
+//! and the exact Hessian against finite differences, a definite Hessian, the distance functions, validation.
 
 use nalgebra::Vector3;
 use splinerod_core::{BSplineSpace, BlockBanded, HessianKind, Material, Real, Rod};
@@ -102,6 +102,51 @@ fn sphere_and_capsule_gradients_match_finite_differences() {
         let min = dense.clone().symmetric_eigenvalues().min();
         assert!(min >= -1e-9 * dense.amax(), "{o:?}: eigenvalue {min}");
         assert!(c.admissible(&rod));
+    }
+}
+
+#[test]
+fn the_exact_hessian_of_curved_obstacles_matches_differences_of_the_gradient() {
+    // With the surface-curvature term: the sphere's and the capsule's (side and cap).
+    let obstacles = [
+        Obstacle::Sphere {
+            centre: Vector3::zeros(),
+            radius: 0.1,
+        },
+        Obstacle::Capsule {
+            a: Vector3::new(0.0, 0.0, -0.3),
+            b: Vector3::new(0.0, 0.0, 0.3),
+            radius: 0.1,
+        },
+        Obstacle::Capsule {
+            a: Vector3::new(0.0, 0.0, 0.0),
+            b: Vector3::new(0.0, 0.0, 0.3),
+            radius: 0.1,
+        },
+    ];
+    for o in obstacles {
+        let c = with(vec![o]);
+        let rod = draped(0.4 * R);
+        let mut h = BlockBanded::zeros(rod.len(), rod.basis().degree());
+        c.add_hessian(&rod, HessianKind::Exact, &mut h);
+        let dense = h.to_dense();
+        let step = 1e-7;
+        let mut worst: Real = 0.0;
+        for j in 0..3 * rod.len() {
+            let (mut plus, mut minus) = (rod.clone(), rod.clone());
+            plus.positions[j / 3][j % 3] += step;
+            minus.positions[j / 3][j % 3] -= step;
+            let (gp, gm) = (gradient(&c, &plus), gradient(&c, &minus));
+            for i in 0..3 * rod.len() {
+                let fd = (gp[i / 3][i % 3] - gm[i / 3][i % 3]) / (2.0 * step);
+                worst = worst.max((fd - dense[(i, j)]).abs());
+            }
+        }
+        assert!(
+            worst <= 1e-5 * dense.amax(),
+            "{o:?}: {worst} of {}",
+            dense.amax()
+        );
     }
 }
 

@@ -93,7 +93,7 @@ impl Energy for Contact {
         d.group_hessian = local;
         d.sums = sums;
         drop(d);
-        if self.add_surface_hessian(rod, hessian).is_err() {
+        if self.add_surface_hessian(rod, kind, hessian).is_err() {
             hessian.scale(Real::NAN);
             return;
         }

@@ -11,8 +11,12 @@
 //!
 //! (as the floor: a length of rod equal to its diameter pressed into an obstacle resists
 //! like one self-contact). The Hessian keeps \\(\tfrac{w_a}{2r} \phi''(g_a)\, b_i b_j\,
-//! n_a n_a^T\\) and drops the surface-curvature term \\(\phi'/\rho\, (I - n n^T)\\)
-//! (negative semi-definite for a convex obstacle of radius ρ), as self-contact does.
+//! n_a n_a^T\\); the exact kind ([`splinerod_core::HessianKind::Exact`]) adds the
+//! surface-curvature term \\(\tfrac{w_a}{2r} \phi'(g_a)\, b_i b_j\, \nabla n\\), with
+//! \\(\nabla n = (I - n n^T)/\rho\\) at a distance ρ from a sphere's centre or a
+//! capsule's cap, \\((I - n n^T - u u^T)/\rho\\) from a capsule's axis of direction `u`,
+//! zero for a plane — negative semi-definite (φ' < 0 in contact), so the Newton steps'
+//! definite kind drops it, as self-contact drops the normal's turning.
 //! The samples are those of the self-contact detection (spacing `0.2 r` by default), so
 //! an obstacle much thinner than a knot span is still seen.
 //!
@@ -22,7 +26,7 @@
 
 use super::surface::PenaltyPoint;
 use super::Contact;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{CoreError, Keyframes, Real, Rod};
 
 /// A rigid, static obstacle.
@@ -111,6 +115,34 @@ impl Obstacle {
             }
         }
         Ok(())
+    }
+
+    /// The derivative \\(\nabla n\\) of the outward unit normal at `x` (the surface's
+    /// curvature seen from `x`; module docs).
+    pub fn normal_derivative(&self, x: &Vector3<Real>) -> Matrix3<Real> {
+        let turning = |v: Vector3<Real>, along: Option<Vector3<Real>>| {
+            let rho = v.norm();
+            if rho == 0.0 {
+                return Matrix3::zeros();
+            }
+            let n = v / rho;
+            let mut m = Matrix3::identity() - n * n.transpose();
+            if let Some(u) = along {
+                m -= u * u.transpose();
+            }
+            m / rho
+        };
+        match *self {
+            Obstacle::Plane { .. } => Matrix3::zeros(),
+            Obstacle::Sphere { centre, .. } => turning(x - centre, None),
+            Obstacle::Capsule { a, b, .. } => {
+                let axis = b - a;
+                let t = (x - a).dot(&axis) / axis.norm_squared();
+                let core = a + axis * t.clamp(0.0, 1.0);
+                let side = (t > 0.0 && t < 1.0).then(|| axis.normalize());
+                turning(x - core, side)
+            }
+        }
     }
 
     /// Signed distance (m) from `x` to the surface (negative inside) and the outward
@@ -212,6 +244,7 @@ impl Contact {
                         obstacle: Some(i),
                         radius: r,
                         s: samples.s[k],
+                        at: *x,
                     });
                 }
             }

@@ -14,7 +14,7 @@
 use super::Contact;
 use nalgebra::{Matrix3, Vector3};
 use splinerod_core::basis::MAX_ORDER;
-use splinerod_core::{BlockBanded, CoreError, Real, Rod};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, Real, Rod};
 
 /// A point of the rod within the penalty's reach of a surface.
 pub(crate) struct PenaltyPoint<'a> {
@@ -34,6 +34,8 @@ pub(crate) struct PenaltyPoint<'a> {
     pub radius: Real,
     /// Its material coordinate, m.
     pub s: Real,
+    /// Its position, m.
+    pub at: Vector3<Real>,
 }
 
 impl Contact {
@@ -60,6 +62,7 @@ impl Contact {
                     obstacle: None,
                     radius: r,
                     s: q.s,
+                    at: x,
                 });
             }
         }
@@ -96,19 +99,25 @@ impl Contact {
         })
     }
 
-    /// Adds the surfaces' Hessian (exact for the floor; for curved obstacles without the
-    /// negative semi-definite surface-curvature term).
+    /// Adds the surfaces' Hessian: exact for the floor and planes; for curved obstacles
+    /// the negative semi-definite surface-curvature term only with
+    /// [`HessianKind::Exact`] ([`super::obstacle`]).
     pub(crate) fn add_surface_hessian(
         &self,
         rod: &Rod,
+        kind: HessianKind,
         hessian: &mut BlockBanded,
     ) -> Result<(), CoreError> {
         self.for_each_surface_point(rod, |p| {
-            let nn: Matrix3<Real> = p.normal * p.normal.transpose();
-            let c = p.weight * self.penalty.curvature(p.gap);
+            let mut m: Matrix3<Real> =
+                p.normal * p.normal.transpose() * (p.weight * self.penalty.curvature(p.gap));
+            if let (HessianKind::Exact, Some(i)) = (kind, p.obstacle) {
+                let turning = self.obstacles[i].normal_derivative(&p.at);
+                m += turning * (p.weight * self.penalty.slope(p.gap));
+            }
             for (a, ba) in p.row.iter().enumerate() {
                 for (b, bb) in p.row.iter().enumerate().skip(a) {
-                    hessian.add_block(p.first + a, p.first + b, &(nn * (c * ba * bb)));
+                    hessian.add_block(p.first + a, p.first + b, &(m * (ba * bb)));
                 }
             }
         })

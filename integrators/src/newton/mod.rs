@@ -18,6 +18,7 @@
 //! [`ConvergenceTracker`]'s, the type each lane of the batched solver
 //! ([`crate::lane_euler`]) owns too; [`crate::convergence`] states the rules and why.
 
+mod carried;
 mod line_search;
 mod tangent;
 
@@ -182,6 +183,9 @@ pub struct NewtonWorkspace {
     origin: Vec<Vector3<Real>>,
     /// The problem's matrix, unfactorised, for the tangent solves' multipliers.
     spare: BlockBanded,
+    /// A tangent solve's exact and definite matrices when the exact one was indefinite
+    /// ([`carried`]): their difference rides with the remainder's correction.
+    carried: Option<carried::Carried>,
 }
 
 impl NewtonWorkspace {
@@ -330,16 +334,25 @@ fn solve_factored(
     // With an indefinite P (LDLT of a compressed rod's exact Hessian) conjugate gradients
     // have no inner product to work in: the step stays P's (measured on a cut rod pulled
     // into compression: fewer Newton iterations than an unguarded correction).
-    if scale > 0.0 && !ws.solver.is_indefinite() && system.has_hessian_remainder() {
+    let remainder = scale > 0.0 && system.has_hessian_remainder();
+    if (remainder || ws.carried.is_some()) && !ws.solver.is_indefinite() {
         let first = ws.flat.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
         let floor = ws
             .floor
             .min(MOTION_FRACTION * *ws.motion.get_or_insert(first));
         let (solver, constraints, mu) = (&mut ws.solver, &mut ws.constraints, &mut ws.scratch_mu);
+        let carried = &mut ws.carried;
         stats.remainder_iterations += ws.remainder.correct(
             &mut ws.flat,
             floor,
-            &mut |v, sign, out| system.add_hessian_remainder(v, sign * scale, out),
+            &mut |v, sign, out| {
+                if remainder {
+                    system.add_hessian_remainder(v, sign * scale, out);
+                }
+                if let Some(c) = carried.as_mut() {
+                    c.add_product(v, sign, out);
+                }
+            },
             &mut |z| constraints.solve_homogeneous(solver, x, z, mu),
         )?;
     }

@@ -10,6 +10,7 @@
 //! or periodic; the pins' Schur complement; the remainder's correction by conjugate
 //! gradients to relative 1e-9) serves every parameter.
 
+use super::carried::Carried;
 use super::{factor_matrix, solve_factored, NewtonProblem, NewtonWorkspace};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -47,7 +48,8 @@ pub fn tangents(
     let mut stats = StepStats::default();
     factor_matrix(problem, system, ws, false)?;
     ws.constraints.factor(&mut ws.solver)?;
-    if !exact(problem) {
+    let carried = carry_if_indefinite(problem, system, ws)?;
+    if !carried && !exact(problem) {
         return Err(IntegratorError::NotPositiveDefinite {
             context: "the exact Hessian at the equilibrium, for sensitivities",
         });
@@ -55,7 +57,36 @@ pub fn tangents(
     let zeros = std::mem::take(&mut ws.origin);
     let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
     ws.origin = zeros;
+    ws.carried = None;
     solved.map(|()| stats)
+}
+
+/// When the exact banded matrix was factorised indefinite and a remainder needs the
+/// correction (which an indefinite factor cannot precondition), switches to the
+/// problem's definite matrix and carries the difference ([`super::carried`]); whether
+/// it did.
+fn carry_if_indefinite(
+    problem: &mut dyn NewtonProblem,
+    system: &dyn System,
+    ws: &mut NewtonWorkspace,
+) -> Result<bool, IntegratorError> {
+    let corrected = problem.hessian_scale() > 0.0 && system.has_hessian_remainder();
+    if !(ws.solver.is_indefinite() && corrected) {
+        return Ok(false);
+    }
+    let mut carried = Carried::default();
+    problem.matrix(system, &mut carried.exact);
+    if !problem.on_not_positive_definite() {
+        return Ok(false);
+    }
+    problem.matrix(system, &mut carried.definite);
+    factor_matrix(problem, system, ws, false)?;
+    ws.constraints.factor(&mut ws.solver)?;
+    if ws.solver.is_indefinite() {
+        return Ok(false);
+    }
+    ws.carried = Some(carried);
+    Ok(true)
 }
 
 /// Solves each case with the factorised matrix, from the iterate `zeros`.
@@ -118,6 +149,9 @@ fn remainder_multipliers(
     }
     let scale = problem.hessian_scale();
     system.add_hessian_remainder(&ws.dx, scale, &mut ws.base);
+    if let Some(c) = ws.carried.as_mut() {
+        c.add_product(&ws.dx, 1.0, &mut ws.base);
+    }
     ws.constraints
         .remainder_multipliers(&ws.flat, &ws.base, &mut ws.multipliers);
 }
@@ -162,5 +196,8 @@ fn all_multipliers(
         *b += r;
     }
     system.add_hessian_remainder(&ws.dx, problem.hessian_scale(), &mut ws.base);
+    if let Some(c) = ws.carried.as_mut() {
+        c.add_product(&ws.dx, 1.0, &mut ws.base);
+    }
     ws.constraints.multipliers_of(&ws.base, &mut ws.multipliers)
 }
