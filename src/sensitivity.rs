@@ -68,34 +68,12 @@ impl StaticSensitivities {
     /// parameter name, one per `[[pins]]` entry) and `at` (the samples' equilibrium
     /// positions).
     pub fn json(&self) -> serde_json::Value {
-        let names = self
-            .parameters
-            .iter()
-            .map(|(name, value)| serde_json::json!({ "name": name, "value": value }));
-        let positions: serde_json::Map<String, serde_json::Value> = self
-            .parameters
-            .iter()
-            .zip(&self.positions)
-            .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
-            .collect();
-        let pin_forces: serde_json::Map<String, serde_json::Value> = self
-            .parameters
-            .iter()
-            .zip(&self.pin_forces)
-            .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
-            .collect();
-        serde_json::json!({
-            "parameters": names.collect::<Vec<_>>(),
-            "s": self.s,
-            "positions": positions,
-            "pin_forces": pin_forces,
-            "at": self.at,
-        })
+        let derivatives = (&self.positions[..], &self.pin_forces[..]);
+        shared_json(&self.parameters, &self.s, derivatives, &self.at)
     }
 
     /// One line per parameter: its value and the largest derivative of a sample.
     pub fn summary(&self) -> Vec<String> {
-        let largest = |d: &[[Real; 3]]| d.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()));
         let lines = self.parameters.iter().zip(&self.positions);
         lines
             .map(|((name, value), d)| {
@@ -106,6 +84,69 @@ impl StaticSensitivities {
             })
             .collect()
     }
+}
+
+/// One parameter's derivatives of a list of points or forces.
+type PerParameter = Vec<[Real; 3]>;
+
+/// The JSON keys static and run sensitivities share: `parameters` (`name`, `value`),
+/// `s`, `positions` and `pin_forces` (per parameter name) and `at`.
+pub(crate) fn shared_json(
+    parameters: &[(String, Real)],
+    s: &[Real],
+    (positions, pin_forces): (&[PerParameter], &[PerParameter]),
+    at: &[[Real; 3]],
+) -> serde_json::Value {
+    let names = parameters
+        .iter()
+        .map(|(name, value)| serde_json::json!({ "name": name, "value": value }));
+    serde_json::json!({
+        "parameters": names.collect::<Vec<_>>(),
+        "s": s,
+        "positions": by_name(parameters, positions),
+        "pin_forces": by_name(parameters, pin_forces),
+        "at": at,
+    })
+}
+
+/// Each parameter's entry of `d`, keyed by its name.
+pub(crate) fn by_name(
+    parameters: &[(String, Real)],
+    d: &[Vec<[Real; 3]>],
+) -> serde_json::Map<String, serde_json::Value> {
+    let pairs = parameters.iter().zip(d);
+    pairs
+        .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
+        .collect()
+}
+
+/// The output samples' fractions and their basis rows on `rod`.
+pub(crate) fn sample_rows(
+    scene: &Scene,
+    rod: &Rod,
+) -> Result<(Vec<Real>, Vec<splinerod_core::BasisValues>), Error> {
+    let samples = scene.output.samples;
+    let s: Vec<Real> = (0..samples)
+        .map(|k| k as Real / (samples - 1) as Real)
+        .collect();
+    let rows = s
+        .iter()
+        .map(|&f| rod.basis_at(scene.material_coordinate(f)))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((s, rows))
+}
+
+/// The curve of control points (or of their derivatives) `q` at the basis rows `rows`.
+pub(crate) fn points_at(
+    rows: &[splinerod_core::BasisValues],
+    q: &[Vector3<Real>],
+) -> Vec<[Real; 3]> {
+    rows.iter().map(|b| b.combine(&b.value, q).into()).collect()
+}
+
+/// The largest component of the derivatives `d`.
+pub(crate) fn largest(d: &[[Real; 3]]) -> Real {
+    d.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()))
 }
 
 /// What a parameter path names.
@@ -166,23 +207,9 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         .map(|c| crate::run::pins::fold_pin_forces(scene, &sim, c.multipliers.clone()))
         .collect();
     let rhs: Vec<Vec<Vector3<Real>>> = cases.into_iter().map(|c| c.positions).collect();
-    let samples = scene.output.samples;
-    let s: Vec<Real> = (0..samples)
-        .map(|k| k as Real / (samples - 1) as Real)
-        .collect();
     let rod = &system.rod;
-    let rows = s
-        .iter()
-        .map(|&f| rod.basis_at(scene.material_coordinate(f)))
-        .collect::<Result<Vec<_>, _>>()?;
-    let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
-        let at = |b: &splinerod_core::BasisValues| {
-            (0..b.order)
-                .map(|k| q[b.first + k] * b.value[k])
-                .sum::<Vector3<Real>>()
-        };
-        rows.iter().map(|b| at(b).into()).collect()
-    };
+    let (s, rows) = sample_rows(scene, rod)?;
+    let point = |q: &[Vector3<Real>]| points_at(&rows, q);
     Ok(StaticSensitivities {
         parameters,
         positions: rhs.iter().map(|d| point(d)).collect(),

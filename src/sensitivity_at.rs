@@ -8,7 +8,9 @@
 //! BDF2), [`run_sensitivities_at`] gives them after every step from the forward
 //! sensitivities (`Simulation.sensitivity_history`), the last of them at the end.
 
-use crate::sensitivity::{observed_sensitivities, static_sensitivities, StaticSensitivities};
+use crate::sensitivity::{
+    observed_sensitivities, points_at, static_sensitivities, StaticSensitivities,
+};
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
@@ -56,14 +58,7 @@ pub fn evaluate_at(
         .iter()
         .map(|&x| rod.basis_at(x))
         .collect::<Result<Vec<_>, _>>()?;
-    let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
-        let at = |b: &splinerod_core::BasisValues| {
-            (0..b.order)
-                .map(|k| q[b.first + k] * b.value[k])
-                .sum::<Vector3<Real>>()
-        };
-        rows.iter().map(|b| at(b).into()).collect()
-    };
+    let point = |q: &[Vector3<Real>]| points_at(&rows, q);
     Ok(SensitivitiesAt {
         parameters: sensitivities.parameters.clone(),
         s: s.to_vec(),
@@ -115,9 +110,7 @@ pub fn run_sensitivities_at(
                 .map(|&x| rod.basis_at(x))
                 .collect::<Result<_, _>>()?;
         }
-        let point = |q: &[Vector3<Real>]| -> Vec<[Real; 3]> {
-            rows.iter().map(|b| b.combine(&b.value, q).into()).collect()
-        };
+        let point = |q: &[Vector3<Real>]| points_at(&rows, q);
         times.push(t);
         positions.push(states.iter().map(|d| point(&d.positions)).collect());
         at.push(point(&rod.positions));

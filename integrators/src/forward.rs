@@ -153,6 +153,9 @@ pub(crate) fn propagate(
     let kind = work.kind.ok_or(IntegratorError::SolverState(
         "forward sensitivities need the last step solved by implicit Euler or BDF2",
     ))?;
+    let step = stepper.step.ok_or(IntegratorError::SolverState(
+        "forward sensitivities need a step solved first",
+    ))?;
     let n = system.rod().len();
     if states
         .iter()
@@ -173,7 +176,6 @@ pub(crate) fn propagate(
         std::mem::swap(&mut rod.velocities, &mut work.end.1);
     }
     let stats = result?;
-    let step = stepper.step.expect("a solved step");
     for (state, case) in states.iter_mut().zip(&work.cases) {
         advance(state, case, kind, step.beta, step.reach);
     }
@@ -228,7 +230,9 @@ fn tangent_solves(
         residual_rate(stepper, (m, a), system, work);
         let case = &mut work.cases[k];
         case.residual_rate.copy_from_slice(&work.scratch);
-        let step = stepper.step.expect("a solved step");
+        let step = stepper
+            .step
+            .ok_or(IntegratorError::SolverState("a solved step"))?;
         let keep = 1.0 - step.beta / step.reach;
         for (t, pin) in case.target_rates.iter_mut().zip(system.pins()) {
             if keep == 0.0 {

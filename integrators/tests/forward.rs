@@ -11,33 +11,10 @@ use splinerod_integrators::{
     Bdf2, ForwardState, ImplicitEuler, ImplicitMidpoint, Integrator, IntegratorError, NewtonParams,
     ParameterRates, System,
 };
-use std::alloc::{GlobalAlloc, Layout, System as SystemAlloc};
-use std::cell::Cell;
 
-/// Counts the heap allocations of this thread.
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: defers every operation to the system allocator; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { SystemAlloc.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { SystemAlloc.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-        unsafe { SystemAlloc.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting.rs"]
+mod counting;
+use counting::allocations_during;
 
 /// The parameters: stiffness `k`, gravity's `y`, damping `α`.
 #[derive(Debug, Clone, Copy)]
@@ -223,11 +200,11 @@ fn forward_steps_do_not_allocate_after_warm_up() {
         for _ in 0..3 {
             step(&mut string);
         }
-        let before = ALLOCATIONS.with(|c| c.get());
-        for _ in 0..20 {
-            step(&mut string);
-        }
-        let count = ALLOCATIONS.with(|c| c.get()) - before;
+        let count = allocations_during(|| {
+            for _ in 0..20 {
+                step(&mut string);
+            }
+        });
         assert_eq!(count, 0, "{name}: {count} allocations in 20 forward steps");
     }
 }

@@ -6,7 +6,8 @@
 //! `rods[k].<field>`, `world.gravity[c]`, `loads[i].force[c]`) is followed key by key
 //! and index by index; a gravity the file leaves at its default is written out whole.
 //! The result is parsed again as a scene, and every fitted value read back from it
-//! must equal the fit's bit for bit.
+//! must equal the fit's bit for bit (a text round trip — shortest round-trip decimals,
+//! no arithmetic — so under any kernel set).
 
 use crate::sensitivity::{parameter_value, set_parameter};
 use crate::{Error, Real, Scene};

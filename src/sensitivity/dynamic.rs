@@ -42,10 +42,11 @@
 //! of one of several `[[rods]]`.
 
 use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
+use super::{by_name, largest, points_at, sample_rows, shared_json};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
-use splinerod_core::{BasisValues, Real, Rod};
+use splinerod_core::{Real, Rod};
 use splinerod_integrators::{ForwardState, IntegratorError, ParameterRates, System};
 
 /// The derivatives of a run's recorded samples at one output time.
@@ -93,16 +94,7 @@ impl DynamicSensitivities {
     /// (`parameters`, `s`, `positions`, `pin_forces`, `at`: at the end) and `times`, a
     /// list of `{t, positions: {name: [[dx, dy, dz], …]}, at}`.
     pub fn json(&self) -> serde_json::Value {
-        let names = self
-            .parameters
-            .iter()
-            .map(|(name, value)| serde_json::json!({ "name": name, "value": value }));
-        let by_name = |d: &[Vec<[Real; 3]>]| -> serde_json::Map<String, serde_json::Value> {
-            let pairs = self.parameters.iter().zip(d);
-            pairs
-                .map(|((name, _), d)| (name.clone(), serde_json::json!(d)))
-                .collect()
-        };
+        let by_name = |d: &[Vec<[Real; 3]>]| by_name(&self.parameters, d);
         let times: Vec<serde_json::Value> = self
             .times
             .iter()
@@ -110,19 +102,14 @@ impl DynamicSensitivities {
                 |t| serde_json::json!({ "t": t.t, "positions": by_name(&t.positions), "at": t.at }),
             )
             .collect();
-        serde_json::json!({
-            "parameters": names.collect::<Vec<_>>(),
-            "s": self.s,
-            "positions": by_name(&self.positions),
-            "pin_forces": by_name(&self.pin_forces),
-            "at": self.at,
-            "times": times,
-        })
+        let derivatives = (&self.positions[..], &self.pin_forces[..]);
+        let mut json = shared_json(&self.parameters, &self.s, derivatives, &self.at);
+        json["times"] = serde_json::Value::Array(times);
+        json
     }
 
     /// One line per parameter: its value and the largest derivative of a final sample.
     pub fn summary(&self) -> Vec<String> {
-        let largest = |d: &[[Real; 3]]| d.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()));
         let lines = self.parameters.iter().zip(&self.positions);
         lines
             .map(|((name, value), d)| {
@@ -173,8 +160,11 @@ pub fn observed_sensitivities(
         observe(sim.time, &sim.system.rod, &states)?;
         times.push(TimeSensitivities {
             t: sim.time,
-            positions: states.iter().map(|d| point(&rows, &d.positions)).collect(),
-            at: point(&rows, &sim.system.rod.positions),
+            positions: states
+                .iter()
+                .map(|d| points_at(&rows, &d.positions))
+                .collect(),
+            at: points_at(&rows, &sim.system.rod.positions),
         });
     }
     let pin_forces = states
@@ -188,8 +178,11 @@ pub fn observed_sensitivities(
             .zip(rates.values)
             .collect(),
         s,
-        positions: states.iter().map(|d| point(&rows, &d.positions)).collect(),
-        at: point(&rows, &sim.system.rod.positions),
+        positions: states
+            .iter()
+            .map(|d| points_at(&rows, &d.positions))
+            .collect(),
+        at: points_at(&rows, &sim.system.rod.positions),
         pin_forces,
         forces: crate::run::pins::scene_pin_forces(scene, &sim),
         times,
@@ -293,24 +286,6 @@ fn dynamic_target(scene: &Scene, path: &str) -> Result<Target, Error> {
         }
         t => Ok(t),
     }
-}
-
-/// The samples' fractions and their basis rows on `rod`.
-fn sample_rows(scene: &Scene, rod: &Rod) -> Result<(Vec<Real>, Vec<BasisValues>), Error> {
-    let samples = scene.output.samples;
-    let s: Vec<Real> = (0..samples)
-        .map(|k| k as Real / (samples - 1) as Real)
-        .collect();
-    let rows = s
-        .iter()
-        .map(|&f| rod.basis_at(scene.material_coordinate(f)))
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok((s, rows))
-}
-
-/// The curve of control points `q` at the rows.
-fn point(rows: &[BasisValues], q: &[Vector3<Real>]) -> Vec<[Real; 3]> {
-    rows.iter().map(|b| b.combine(&b.value, q).into()).collect()
 }
 
 /// The parameters' rates ([`ParameterRates`]) for the facade's system.

@@ -11,9 +11,12 @@
 use nalgebra::Vector3;
 use splinerod_core::{BlockBanded, Real};
 
-/// The exact and the definite banded matrices of a tangent solve, and scratch.
+/// The exact and the definite banded matrices of a tangent solve, and scratch (kept in
+/// the workspace between solves: no allocation once sized).
 #[derive(Debug, Default)]
 pub(crate) struct Carried {
+    /// Whether the current tangent solve carries the difference.
+    pub active: bool,
     /// \\(P_e\\), the exact banded matrix (indefinite).
     pub exact: BlockBanded,
     /// \\(P_d\\), the definite matrix factorised in its place.
@@ -23,8 +26,11 @@ pub(crate) struct Carried {
 }
 
 impl Carried {
-    /// Adds `sign · (P_e − P_d) v` to `out`.
+    /// Adds `sign · (P_e − P_d) v` to `out` if active.
     pub fn add_product(&mut self, v: &[Vector3<Real>], sign: Real, out: &mut [Vector3<Real>]) {
+        if !self.active {
+            return;
+        }
         let n = v.len();
         self.a.resize(n, Vector3::zeros());
         self.b.resize(n, Vector3::zeros());

@@ -185,7 +185,7 @@ pub struct NewtonWorkspace {
     spare: BlockBanded,
     /// A tangent solve's exact and definite matrices when the exact one was indefinite
     /// ([`carried`]): their difference rides with the remainder's correction.
-    carried: Option<carried::Carried>,
+    carried: carried::Carried,
 }
 
 impl NewtonWorkspace {
@@ -335,7 +335,7 @@ fn solve_factored(
     // have no inner product to work in: the step stays P's (measured on a cut rod pulled
     // into compression: fewer Newton iterations than an unguarded correction).
     let remainder = scale > 0.0 && system.has_hessian_remainder();
-    if (remainder || ws.carried.is_some()) && !ws.solver.is_indefinite() {
+    if (remainder || ws.carried.active) && !ws.solver.is_indefinite() {
         let first = ws.flat.iter().fold(0.0, |m: Real, x| m.max(x.abs()));
         let floor = ws
             .floor
@@ -349,9 +349,7 @@ fn solve_factored(
                 if remainder {
                     system.add_hessian_remainder(v, sign * scale, out);
                 }
-                if let Some(c) = carried.as_mut() {
-                    c.add_product(v, sign, out);
-                }
+                carried.add_product(v, sign, out);
             },
             &mut |z| constraints.solve_homogeneous(solver, x, z, mu),
         )?;

@@ -10,7 +10,6 @@
 //! or periodic; the pins' Schur complement; the remainder's correction by conjugate
 //! gradients to relative 1e-9) serves every parameter.
 
-use super::carried::Carried;
 use super::{factor_matrix, solve_factored, NewtonProblem, NewtonWorkspace};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
@@ -57,7 +56,7 @@ pub fn tangents(
     let zeros = std::mem::take(&mut ws.origin);
     let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
     ws.origin = zeros;
-    ws.carried = None;
+    ws.carried.active = false;
     solved.map(|()| stats)
 }
 
@@ -74,7 +73,7 @@ fn carry_if_indefinite(
     if !(ws.solver.is_indefinite() && corrected) {
         return Ok(false);
     }
-    let mut carried = Carried::default();
+    let carried = &mut ws.carried;
     problem.matrix(system, &mut carried.exact);
     if !problem.on_not_positive_definite() {
         return Ok(false);
@@ -82,11 +81,8 @@ fn carry_if_indefinite(
     problem.matrix(system, &mut carried.definite);
     factor_matrix(problem, system, ws, false)?;
     ws.constraints.factor(&mut ws.solver)?;
-    if ws.solver.is_indefinite() {
-        return Ok(false);
-    }
-    ws.carried = Some(carried);
-    Ok(true)
+    ws.carried.active = !ws.solver.is_indefinite();
+    Ok(ws.carried.active)
 }
 
 /// Solves each case with the factorised matrix, from the iterate `zeros`.
@@ -149,9 +145,7 @@ fn remainder_multipliers(
     }
     let scale = problem.hessian_scale();
     system.add_hessian_remainder(&ws.dx, scale, &mut ws.base);
-    if let Some(c) = ws.carried.as_mut() {
-        c.add_product(&ws.dx, 1.0, &mut ws.base);
-    }
+    ws.carried.add_product(&ws.dx, 1.0, &mut ws.base);
     ws.constraints
         .remainder_multipliers(&ws.flat, &ws.base, &mut ws.multipliers);
 }
@@ -196,8 +190,6 @@ fn all_multipliers(
         *b += r;
     }
     system.add_hessian_remainder(&ws.dx, problem.hessian_scale(), &mut ws.base);
-    if let Some(c) = ws.carried.as_mut() {
-        c.add_product(&ws.dx, 1.0, &mut ws.base);
-    }
+    ws.carried.add_product(&ws.dx, 1.0, &mut ws.base);
     ws.constraints.multipliers_of(&ws.base, &mut ws.multipliers)
 }
