@@ -1,9 +1,11 @@
 //! Time per rod-step of an ensemble of 16-point cables (one Newton iteration per step,
 //! as `bench`'s ensemble figures) against the ensemble's size:
 //! `RAYON_NUM_THREADS=1 cargo run --release --example ensemble_cost [STEPS_TOTAL]
-//! [alone|batched] [SIZE] [bending]` for one thread (`STEPS_TOTAL` rod-steps per size,
-//! 100 000 by default; `alone`: every member stepped on its own, not batched; `SIZE`:
-//! that ensemble size only; `bending`: the cables have bending stiffness 1e-3 N·m²). Small ensembles stay in
+//! [alone|batched] [SIZE] [bending|plain] [step]` for one thread (`STEPS_TOTAL` rod-steps
+//! per size, 100 000 by default; `alone`: every member stepped on its own, not batched;
+//! `SIZE`: that ensemble size only; `bending`: the cables have bending stiffness 1e-3
+//! N·m²; `step`: one `Ensemble::step` call per step instead of one `Ensemble::advance`
+//! for all, which keeps the lanes of batched groups between steps). Small ensembles stay in
 //! the caches; from about a thousand members each step streams every member's matrices
 //! and tables from memory, which is what batching members that share a basis (one table
 //! for many rods, #17) would cut.
@@ -24,6 +26,7 @@ fn main() -> Result<(), Error> {
     };
     let only: Option<usize> = std::env::args().nth(3).and_then(|a| a.parse().ok());
     let bending = std::env::args().nth(4).as_deref() == Some("bending");
+    let per_step = std::env::args().nth(5).as_deref() == Some("step");
     let counts = only.map_or(vec![10, 100, 1_000, 10_000], |c| vec![c]);
     for count in counts {
         let members = (0..count)
@@ -44,8 +47,12 @@ fn main() -> Result<(), Error> {
         ensemble.step(1e-3)?;
         let steps = (total / count).max(1);
         let t = Instant::now();
-        for _ in 0..steps {
-            ensemble.step(1e-3)?;
+        if per_step {
+            for _ in 0..steps {
+                ensemble.step(1e-3)?;
+            }
+        } else {
+            ensemble.advance(1e-3, steps)?;
         }
         let us = t.elapsed().as_secs_f64() / (count * steps) as Real * 1e6;
         println!("{count:>6} members: {us:.2} µs per rod-step");

@@ -12,7 +12,7 @@ use splinerod::{Ensemble, Scene, Simulation, Unbatched};
 /// The default scene as an ensemble, on the lumped mixed form: the form the lanes
 /// batch (the default `"auto"` takes the consistent one for these soft cables, which
 /// are stepped alone).
-fn hanging_cables(count: usize) -> String {
+pub(crate) fn hanging_cables(count: usize) -> String {
     let scene = include_str!("../scenes/hanging_cable.toml").replacen(
         "stretch_stiffness = 100.0\n",
         "stretch_stiffness = 100.0\nstretch_formulation = \"mixed\"\n",
@@ -24,7 +24,7 @@ fn hanging_cables(count: usize) -> String {
     )
 }
 
-fn members(text: &str) -> Vec<Simulation> {
+pub(crate) fn members(text: &str) -> Vec<Simulation> {
     let scene = Scene::from_toml(text).expect("scene");
     let spec = scene.ensemble.as_ref().expect("ensemble");
     (0..spec.count)
@@ -133,7 +133,7 @@ fn assert_stepped_alone(text: &str, steps: usize) {
 }
 
 /// The hanging cables of [`hanging_cables`] with bending stiffness `EI = 1e-3 N·m²`.
-fn bending_cables(count: usize) -> String {
+pub(crate) fn bending_cables(count: usize) -> String {
     hanging_cables(count).replace(
         "stretch_stiffness = 100.0\n",
         "stretch_stiffness = 100.0\nbending_stiffness = 1e-3\n",

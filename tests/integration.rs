@@ -39,6 +39,7 @@ mod friction;
 mod fuzz_scenes;
 mod hard_cases;
 mod integrator_energy;
+mod kept_lanes;
 mod kernels;
 mod knot_changes;
 mod knot_geometry;

@@ -46,6 +46,16 @@ pub enum LaneTerm<'a> {
 }
 
 impl LaneTerm<'_> {
+    /// Whether the term stays what it is from one step to the next while its rod's knots
+    /// do: not the stretching of an inextensible rod, whose multipliers are updated
+    /// after every step (a run of steps kept in the lanes must not skip that update).
+    pub fn holds_across_steps(&self) -> bool {
+        match self {
+            LaneTerm::Moments(m) => !m.has_multipliers(),
+            LaneTerm::Gravity { .. } | LaneTerm::Bending(_) => true,
+        }
+    }
+
     /// Whether `other` is the same form (variant).
     pub fn same_form(&self, other: &LaneTerm<'_>) -> bool {
         std::mem::discriminant(self) == std::mem::discriminant(other)

@@ -11,7 +11,10 @@
 //! and a member's bits depend neither on the grouping nor on its lane-mates (a member
 //! alone is solved in the lanes too), so results stay bit-identical for any thread
 //! count and any split into shards (under one kernel set, [`splinerod_core::kernels`]).
+//! [`Ensemble::advance`] takes many steps in one call, a group at a time, keeping the
+//! lanes' state between the steps of a group that can (`world/kept.rs`).
 
+use crate::world::kept::advance_group;
 use crate::world::lanes::preload_group;
 use crate::world::unbatched::Unbatched;
 use crate::{Error, Simulation, StepReport};
@@ -68,10 +71,24 @@ impl Ensemble {
     /// why its step was solved alone, if it was ([`StepReport::unbatched`]).
     pub fn step(&mut self, dt: Real) -> Result<(), Error> {
         let batched = self.batched;
-        let prepare = move |group: &mut [Simulation], alone: &mut [Option<Unbatched>]| {
-            preload_group(group, dt, batched, alone);
-        };
-        self.each(prepare, |sim| sim.step(dt), true)
+        self.groups(|first, members, reports| step_group(first, members, reports, dt, batched))
+    }
+
+    /// `steps` steps of `dt`: the same results, bit for bit, as [`Ensemble::step`]
+    /// called `steps` times (a member whose step fails keeps its state at that step's
+    /// start and tries the next step from there; the error of the first failing member
+    /// by index is returned at the end), faster. Each group of [`LANES`] members takes
+    /// all its steps before the next group starts (so its data stays in the caches),
+    /// and a group whose members are all batched with nothing to do between steps but
+    /// the solve keeps its state in the lanes from one step to the next and writes it
+    /// back into the members once, at the end (`world/kept.rs`). Members' public
+    /// fields are current when the call returns; [`Ensemble::reports`] are the last
+    /// step's.
+    pub fn advance(&mut self, dt: Real, steps: usize) -> Result<(), Error> {
+        let batched = self.batched;
+        self.groups(|first, members, reports| {
+            advance_group(first, members, reports, (dt, steps), batched)
+        })
     }
 
     /// Every member's [`Simulation::settle`] (the static solve), as [`Ensemble::step`].
@@ -89,17 +106,26 @@ impl Ensemble {
         stage: impl Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
         timed: bool,
     ) -> Result<(), Error> {
-        self.reports
-            .resize(self.members.len(), StepReport::default());
         let steps = Stages {
             prepare: &prepare,
             stage: &stage,
             timed,
         };
+        self.groups(|first, members, reports| steps.group(first, members, reports))
+    }
+
+    /// Runs `group` on every group of at most [`LANES`] consecutive members (with the
+    /// index of its first member and its reports); the error of the first failing member.
+    fn groups(
+        &mut self,
+        group: impl Fn(usize, &mut [Simulation], &mut [StepReport]) -> Failure + Sync,
+    ) -> Result<(), Error> {
+        self.reports
+            .resize(self.members.len(), StepReport::default());
         let failed = match (self.members.as_mut_slice(), self.reports.as_mut_slice()) {
             // One member (a single run, or a shard of one): no thread pool round trip
             // (tens of µs a step); batched all the same, its lanes repeated.
-            (members @ [_], reports) => steps.group(0, members, reports),
+            (members @ [_], reports) => group(0, members, reports),
             (members, reports) => {
                 // The first group ends at the next multiple of LANES (in the whole
                 // ensemble's numbering): the grouping of a shard is the whole run's.
@@ -107,8 +133,8 @@ impl Ensemble {
                 let head = head.min(members.len());
                 let (first, rest) = members.split_at_mut(head);
                 let (first_reports, rest_reports) = reports.split_at_mut(head);
-                let failed = steps.group(0, first, first_reports);
-                let later = stage_all(head, rest, rest_reports, &steps);
+                let failed = group(0, first, first_reports);
+                let later = stage_all(head, rest, rest_reports, &group);
                 failed.or(later)
             }
         };
@@ -120,6 +146,31 @@ impl Ensemble {
             None => Ok(()),
         }
     }
+}
+
+/// A group's first failing member (its index in the ensemble) and its error, if any.
+pub(crate) type Failure = Option<(usize, Error)>;
+
+/// One step of `dt` of the group of members starting at `first` ([`Ensemble::step`]'s
+/// stages: the batched solve with the ensemble's setting `batched`, then each member's
+/// step); the error of its first failing member.
+pub(crate) fn step_group(
+    first: usize,
+    members: &mut [Simulation],
+    reports: &mut [StepReport],
+    dt: Real,
+    batched: bool,
+) -> Failure {
+    let prepare = move |group: &mut [Simulation], alone: &mut [Option<Unbatched>]| {
+        preload_group(group, dt, batched, alone);
+    };
+    let stage = |sim: &mut Simulation| sim.step(dt);
+    let steps = Stages {
+        prepare: &prepare,
+        stage: &stage,
+        timed: true,
+    };
+    steps.group(first, members, reports)
 }
 
 /// What [`Ensemble::each`] runs on each group: `prepare`, then `stage` on every member.
@@ -176,45 +227,37 @@ fn stage_one(
     }
 }
 
-/// [`Stages::group`] on every group of [`LANES`] members, the first being member
-/// `offset`; the error of the first failing member.
+/// `group` on every group of [`LANES`] members, the first being member `offset`; the
+/// error of the first failing member.
 #[cfg(feature = "parallel")]
-fn stage_all<P, S>(
+fn stage_all(
     offset: usize,
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    steps: &Stages<'_, P, S>,
-) -> Option<(usize, Error)>
-where
-    P: Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
-    S: Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
-{
+    group: &(impl Fn(usize, &mut [Simulation], &mut [StepReport]) -> Failure + Sync),
+) -> Failure {
     use rayon::prelude::*;
     members
         .par_chunks_mut(LANES)
         .zip(reports.par_chunks_mut(LANES))
         .enumerate()
-        .filter_map(|(g, (sims, reports))| steps.group(offset + g * LANES, sims, reports))
+        .filter_map(|(g, (sims, reports))| group(offset + g * LANES, sims, reports))
         .min_by_key(|(i, _)| *i)
 }
 
-/// [`Stages::group`] on every group of [`LANES`] members, the first being member
-/// `offset`; the error of the first failing member.
+/// `group` on every group of [`LANES`] members, the first being member `offset`; the
+/// error of the first failing member.
 #[cfg(not(feature = "parallel"))]
-fn stage_all<P, S>(
+fn stage_all(
     offset: usize,
     members: &mut [Simulation],
     reports: &mut [StepReport],
-    steps: &Stages<'_, P, S>,
-) -> Option<(usize, Error)>
-where
-    P: Fn(&mut [Simulation], &mut [Option<Unbatched>]) + Sync,
-    S: Fn(&mut Simulation) -> Result<StepReport, Error> + Sync,
-{
+    group: &(impl Fn(usize, &mut [Simulation], &mut [StepReport]) -> Failure + Sync),
+) -> Failure {
     let groups = members.chunks_mut(LANES).zip(reports.chunks_mut(LANES));
     let mut first = None;
     for (g, (sims, reports)) in groups.enumerate() {
-        if let Some(e) = steps.group(offset + g * LANES, sims, reports) {
+        if let Some(e) = group(offset + g * LANES, sims, reports) {
             first.get_or_insert(e);
         }
     }

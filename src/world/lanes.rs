@@ -44,7 +44,7 @@ use crate::Simulation;
 use splinerod_core::{Derivatives, Lanes, Real, Rod, LANES};
 use splinerod_energies::lanes::add_lanes;
 use splinerod_energies::{Energy, LaneTerm};
-use splinerod_integrators::lane_euler::{LaneEuler, LanePotential};
+use splinerod_integrators::lane_euler::{LaneEuler, LanePotential, LaneStep};
 use splinerod_integrators::{NewtonParams, System};
 use std::cell::RefCell;
 
@@ -53,12 +53,21 @@ const MAX_TERMS: usize = 8;
 
 thread_local! {
     /// The batched solver's buffers, one per thread (no allocation once sized).
-    static SOLVER: RefCell<LaneEuler> = RefCell::new(LaneEuler::default());
+    pub(crate) static SOLVER: RefCell<LaneEuler> = RefCell::new(LaneEuler::default());
 }
 
 /// The potential of the lanes' systems: per energy, its lane terms.
-struct Terms<'a> {
+pub(crate) struct Terms<'a> {
     terms: [Option<[LaneTerm<'a>; LANES]>; MAX_TERMS],
+}
+
+impl Terms<'_> {
+    /// Whether every term stays what it is from one step to the next
+    /// ([`LaneTerm::holds_across_steps`]).
+    pub(crate) fn hold_across_steps(&self) -> bool {
+        let mut terms = self.terms.iter().flatten().flatten();
+        terms.all(LaneTerm::holds_across_steps)
+    }
 }
 
 impl LanePotential for Terms<'_> {
@@ -135,7 +144,7 @@ pub(crate) fn batching(
 
 /// Whether two members have one shape for the batched step: the same knots, pins at
 /// the same places and the same Newton matrix bandwidth.
-fn same_shape(a: &Simulation, b: &Simulation) -> bool {
+pub(crate) fn same_shape(a: &Simulation, b: &Simulation) -> bool {
     let (ra, rb) = (&a.system.rod, &b.system.rod);
     let (ka, kb) = (ra.basis().knots(), rb.basis().knots());
     let pins = a.system.pins.iter().zip(&b.system.pins).all(|(p, q)| {
@@ -233,13 +242,8 @@ fn solve_lanes(
             .for_each(|&i| alone[i] = Some(Unbatched::Terms));
         return;
     };
-    let rods = members.map(|m| &m.system.rod);
-    let pins = members.map(|m| m.system.pins.as_slice());
-    let bandwidth = members[0].system.hessian_bandwidth();
-    let solved = SOLVER.with(|solver| {
-        let mut solver = solver.borrow_mut();
-        solver.step(rods, pins, &potential, bandwidth, params, dt)
-    });
+    let step = lane_step(members, &potential, params, dt);
+    let solved = SOLVER.with(|solver| solver.borrow_mut().step(&step));
     if solved.is_err() {
         lanes[..count]
             .iter()
@@ -266,9 +270,26 @@ fn solve_lanes(
     });
 }
 
+/// The batched step of `dt` of `members` (one per lane) with their `potential`.
+pub(crate) fn lane_step<'a>(
+    members: [&'a Simulation; LANES],
+    potential: &'a Terms<'a>,
+    params: &'a NewtonParams,
+    dt: Real,
+) -> LaneStep<'a> {
+    LaneStep {
+        rods: members.map(|m| &m.system.rod),
+        pins: members.map(|m| m.system.pins.as_slice()),
+        potential,
+        bandwidth: members[0].system.hessian_bandwidth(),
+        params,
+        dt,
+    }
+}
+
 /// The lane terms of every energy acting on the members, if they all have one and
 /// agree in form and shape.
-fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
+pub(crate) fn lane_terms(members: [&Simulation; LANES]) -> Option<Terms<'_>> {
     let count = members[0].system.acting().count();
     if count > MAX_TERMS || members.iter().any(|m| m.system.acting().count() != count) {
         return None;

@@ -396,6 +396,20 @@ impl Simulation {
         }
     }
 
+    /// What a whole step of `dt` solved elsewhere in one piece, within the time
+    /// tolerance, leaves in the member besides its state (the lanes' kept steps, see
+    /// `world/kept.rs`): the clock and step count advanced, the controller's next length
+    /// as [`Simulation::integrate`] sets it after an accepted sub-step.
+    pub(crate) fn count_solved_step(&mut self, dt: Real) {
+        let min_dt = self.control.min_dt.unwrap_or(dt * DEFAULT_MIN_DT_FRACTION);
+        let h = self.grow(dt, 0.0).max(min_dt).min(dt);
+        self.substep.next = Some(h);
+        self.last_dt = dt;
+        self.time += dt;
+        self.system.time = self.time;
+        self.steps += 1;
+    }
+
     /// The next sub-step length after an accepted one of length `h`.
     fn grow(&mut self, h: Real, error_ratio: Real) -> Real {
         let s = &mut self.substep;

@@ -28,6 +28,11 @@ pub struct MomentTerm<'a> {
 }
 
 impl MomentTerm<'_> {
+    /// Whether the term carries an inextensible rod's multipliers.
+    pub(crate) fn has_multipliers(&self) -> bool {
+        !self.multipliers.is_empty()
+    }
+
     /// Whether the table is for `n` control points with blocks within bandwidth `bw`
     /// and of a width the lane evaluation takes.
     pub(crate) fn fits(&self, n: usize, bw: usize) -> bool {

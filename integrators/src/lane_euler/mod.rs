@@ -26,6 +26,8 @@
 //! of failed lanes one by one, so a failure changes no result; each lane's result
 //! equals the scalar solver's up to round-off.
 
+mod kept;
+pub use kept::StartState;
 mod mass;
 mod pins;
 
@@ -34,6 +36,7 @@ use crate::convergence::ConvergenceTracker;
 use crate::linear::LinearSolverKind;
 use crate::newton::NewtonParams;
 use crate::StepStats;
+use kept::{Keep, Kept};
 use mass::{mass_bilinear, mass_times};
 use nalgebra::Vector3;
 use splinerod_core::lanes::{mul_add, LaneBlock, ZERO};
@@ -72,15 +75,21 @@ pub struct LaneOutcome<'a> {
     pub pin_forces: &'a [Vector3<Real>],
 }
 
-/// The arguments of one [`LaneEuler::step`], passed on as one.
+/// The arguments of one batched step ([`LaneEuler::step`], [`LaneEuler::step_kept`]).
 #[derive(Clone, Copy)]
-struct StepInput<'a> {
-    rods: [&'a Rod; LANES],
-    pins: [&'a [Pin]; LANES],
-    potential: &'a dyn LanePotential,
-    bandwidth: usize,
-    params: &'a NewtonParams,
-    dt: Real,
+pub struct LaneStep<'a> {
+    /// Each lane's rod (read, not changed).
+    pub rods: [&'a Rod; LANES],
+    /// Each lane's pins.
+    pub pins: [&'a [Pin]; LANES],
+    /// The lanes' potential energy.
+    pub potential: &'a dyn LanePotential,
+    /// Block bandwidth of the potential's Hessian.
+    pub bandwidth: usize,
+    /// Newton's settings.
+    pub params: &'a NewtonParams,
+    /// The time step, s.
+    pub dt: Real,
 }
 
 /// Buffers of the batched implicit Euler step (no allocation once sized).
@@ -120,60 +129,59 @@ pub struct LaneEuler {
     out_q: [Vec<Vector3<Real>>; LANES],
     out_v: [Vec<Vector3<Real>>; LANES],
     forces: [Vec<Vector3<Real>>; LANES],
+    /// The state of steps kept in the lanes ([`Self::step_kept`]).
+    kept: Kept,
 }
 
 impl LaneEuler {
-    /// One implicit Euler step of `dt` for each lane's rod (read, not changed) with its
-    /// pins, the potential `potential` whose Hessian has block bandwidth `bandwidth`;
-    /// the results are read with [`Self::outcome`].
-    pub fn step(
-        &mut self,
-        rods: [&Rod; LANES],
-        pins: [&[Pin]; LANES],
-        potential: &dyn LanePotential,
-        bandwidth: usize,
-        params: &NewtonParams,
-        dt: Real,
-    ) -> Result<(), LaneFallback> {
+    /// One implicit Euler step of `step.dt` for each lane's rod (read, not changed) with
+    /// its pins, the potential `step.potential` whose Hessian has block bandwidth
+    /// `step.bandwidth`; the results are read with [`Self::outcome`].
+    pub fn step(&mut self, step: &LaneStep<'_>) -> Result<(), LaneFallback> {
+        self.dispatch(step, Keep::No)
+    }
+
+    /// Checks the settings and runs [`Self::step_lanes`], compiled for the widest lanes
+    /// the processor has.
+    fn dispatch(&mut self, input: &LaneStep<'_>, keep: Keep) -> Result<(), LaneFallback> {
+        let params = input.params;
         if params.linear_solver != LinearSolverKind::Banded || params.max_step.is_some() {
             return Err(LaneFallback("solver settings"));
         }
-        if !(dt.is_finite() && dt > 0.0) {
+        if !(input.dt.is_finite() && input.dt > 0.0) {
             return Err(LaneFallback("time step"));
         }
-        let input = StepInput {
-            rods,
-            pins,
-            potential,
-            bandwidth,
-            params,
-            dt,
-        };
         #[cfg(target_arch = "x86_64")]
         if splinerod_core::lanes::wide() {
             // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-            return unsafe { self.step_wide(&input) };
+            return unsafe { self.step_wide(input, keep) };
         }
-        self.step_lanes(&input)
+        self.step_lanes(input, keep)
     }
 
     /// [`Self::step_lanes`] compiled for AVX2 (four lanes per instruction instead of
     /// two; the arithmetic is the same, so are the results).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn step_wide(&mut self, input: &StepInput<'_>) -> Result<(), LaneFallback> {
-        self.step_lanes(input)
+    unsafe fn step_wide(&mut self, input: &LaneStep<'_>, keep: Keep) -> Result<(), LaneFallback> {
+        self.step_lanes(input, keep)
     }
 
     /// The step of [`Self::step`] once its settings are checked.
     #[inline(always)]
-    fn step_lanes(&mut self, input: &StepInput<'_>) -> Result<(), LaneFallback> {
+    fn step_lanes(&mut self, input: &LaneStep<'_>, keep: Keep) -> Result<(), LaneFallback> {
         self.failed = [None; LANES];
         let (bandwidth, params, dt) = (input.bandwidth, input.params, input.dt);
-        self.gather(input.rods, bandwidth, params)?;
+        match keep {
+            Keep::Next => self.restart(input.rods, params),
+            Keep::No | Keep::First => self.gather(input.rods, bandwidth, params)?,
+        }
         self.place_pins(input.rods, input.pins, dt)?;
         self.newton(input.potential, bandwidth, params, dt);
-        self.scatter(dt);
+        match keep {
+            Keep::No => self.scatter(dt),
+            Keep::First | Keep::Next => self.keep_end(dt),
+        }
         Ok(())
     }
 
