@@ -277,8 +277,10 @@ def prim_names(names):
     return ["".join(c if c.isalnum() else "_" for c in n) or "rod" for n in names]
 
 
-def test_several_rods_adaptive_and_cut_with_obstacles(cli, tmp_path):
-    stage, result, path = run(cli, tmp_path, MULTI)
+@pytest.mark.parametrize("degree", [3, 2, 5])
+def test_several_rods_adaptive_and_cut_with_obstacles(cli, tmp_path, degree):
+    scene = MULTI.replace("\ncontrol_points", f"\ndegree = {degree}\ncontrol_points")
+    stage, result, path = run(cli, tmp_path, scene)
     assert validation_errors(stage) == []
     assert UsdGeom.GetStageUpAxis(stage) == "Y"
     assert UsdGeom.GetStageMetersPerUnit(stage) == 1.0
@@ -294,6 +296,7 @@ def test_several_rods_adaptive_and_cut_with_obstacles(cli, tmp_path):
         assert (curves.GetTypeAttr().Get(), curves.GetBasisAttr().Get()) == ("cubic", "bspline")
         assert curves.GetWrapAttr().Get() == "pinned"
         assert prim.GetAttribute("splinerod:name").Get() == name
+        assert prim.GetAttribute("splinerod:degree").Get() == degree
         assert curves.GetPointsAttr().GetTimeSamples() == list(range(41))
     # The grabbed rope is refined (its count varies); the cut rod has two curves later.
     counts = [len(UsdGeom.BasisCurves(prims[0]).GetPointsAttr().Get(t)) for t in range(41)]
@@ -312,7 +315,7 @@ def test_several_rods_adaptive_and_cut_with_obstacles(cli, tmp_path):
         # ending one curve and starting the next.
         knots = np.concatenate([t for _, t in exact_curves(prim, 40)])
         cuts = len(exact_curves(prim, 40)) - 1
-        assert len(knots) == len(rod["knots"]) + 4 * cuts
+        assert len(knots) == len(rod["knots"]) + (degree + 1) * cuts
         unique = np.unique(np.round(knots / lengths[k], 14))
         np.testing.assert_allclose(unique, np.unique(np.round(rod["knots"], 14)), atol=1e-14)
     # The Python session's control points at every step: the rods' curves in order.
@@ -323,8 +326,8 @@ def test_several_rods_adaptive_and_cut_with_obstacles(cli, tmp_path):
         worst_session = max(worst_session, float(np.max(np.abs(exact - sim.control_points))))
         sim.step()
     assert worst_session <= EXACT
-    print(f"\nseveral rods: probes {worst_probe:.3g} m, session {worst_session:.3g} m, "
-          f"float points {worst_float:.3g} m")
+    print(f"\nseveral rods, degree {degree}: probes {worst_probe:.3g} m, "
+          f"session {worst_session:.3g} m, float points {worst_float:.3g} m")
     check_obstacles(stage)
 
 
@@ -408,3 +411,35 @@ def test_an_unwritable_path_is_refused_naming_it(cli, tmp_path):
                           capture_output=True, text=True)
     assert done.returncode == 2
     assert "--usd" in done.stderr and str(bad) in done.stderr
+
+
+POINT3D = """#usda 1.0
+(
+    defaultPrim = "c"
+)
+def BasisCurves "c"
+{
+    uniform token type = "cubic"
+    uniform token basis = "bspline"
+    int[] curveVertexCounts = [4]
+    point3d[] points = [(0, 0, 0), (1, 0.1, 0), (2, 0, 0), (3.0000000000000004, 0, 0)]
+}
+"""
+
+
+def test_why_points_are_float(tmp_path):
+    """The writer's choice (ARCHITECTURE.md, "USD output"): `point3d[] points` opens and
+    reads back its doubles, but it is not the schema's type: usd-core's validation
+    reports it and typed reads (extents, bounding boxes) find no points. So `points`
+    is `point3f[]` and the doubles go in `splinerod:controlPoints`."""
+    path = tmp_path / "p3d.usda"
+    path.write_text(POINT3D)
+    stage = Usd.Stage.Open(str(path))
+    prim = stage.GetPrimAtPath("/c")
+    points = UsdGeom.BasisCurves(prim).GetPointsAttr()
+    assert points.Get()[3][0] == 3.0000000000000004  # read as doubles, no error
+    assert points.GetTypeName() == "point3f[]"  # what the schema says
+    assert UsdGeom.Boundable.ComputeExtentFromPlugins(UsdGeom.BasisCurves(prim), 0) is None
+    errors = validation_errors(stage)
+    if errors:  # usd-core with UsdValidation (24.08 on)
+        assert any(e.startswith("AttributeTypeMismatch") for e in errors)

@@ -62,12 +62,11 @@ mod shapes;
 mod text;
 
 use crate::run::observe::{Frame, Observer};
-use crate::{Error, RunResult, StepReport};
+use crate::{Error, RunResult, Scene, StepReport};
 use curves::{Layout, Piece, RodStreams, Style};
 use serde::{Deserialize, Serialize};
 use shapes::Shape;
-use splinerod_core::Real;
-use splinerod_energies::Obstacle;
+use splinerod_core::{Real, Rod};
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -84,8 +83,6 @@ pub struct UsdWriter {
     every: usize,
     rods: Vec<Style>,
     shapes: Vec<Shape>,
-    /// Per shape, whether it moves (has time samples).
-    moving: Vec<bool>,
     recorded: Recorded,
     pieces: Vec<Piece>,
     done: bool,
@@ -132,7 +129,6 @@ impl UsdWriter {
             every,
             rods: Vec::new(),
             shapes: Vec::new(),
-            moving: Vec::new(),
             recorded: Recorded::default(),
             pieces: Vec::new(),
             done: false,
@@ -151,55 +147,8 @@ impl UsdWriter {
 
     /// The rods' styles and the shapes, from the scene and the rod (not its state).
     fn set_up(&mut self, frame: &Frame<'_>) {
-        let (scene, rod) = (frame.scene, &frame.system.rod);
-        let mut taken = BTreeSet::new();
-        self.rods = (0..scene.rod_count())
-            .map(|k| {
-                let spec = scene.rod_spec(k);
-                let name = spec.name.clone().unwrap_or_default();
-                let fallback = if scene.rod_count() == 1 {
-                    "rod".into()
-                } else {
-                    format!("rod_{k}")
-                };
-                let closed = rod.is_closed();
-                Style {
-                    prim: unique(&mut taken, prim_name(&name, &fallback)),
-                    name,
-                    degree: rod.basis().degree(),
-                    closed,
-                    periodic: closed && scene.cuts.is_empty(),
-                    width: spec
-                        .radius
-                        .map_or(DEFAULT_WIDTH * spec.rest_length, |r| 2.0 * r),
-                    rest_length: spec.rest_length,
-                }
-            })
-            .collect();
-        let floor = (scene.contact.as_ref().filter(|c| c.enabled)).and_then(|c| c.floor);
-        let floor = floor.map(|h| Obstacle::Plane {
-            point: nalgebra::Vector3::new(0.0, h, 0.0),
-            normal: nalgebra::Vector3::y(),
-        });
-        self.shapes = floor
-            .map(|o| ("floor", "floor".to_string(), o))
-            .into_iter()
-            .chain(scene.obstacles.iter().enumerate().map(|(i, spec)| {
-                let o = spec.obstacle();
-                (kind(&o), format!("obstacle_{i}"), o)
-            }))
-            .map(|(kind, prim, start)| Shape {
-                prim,
-                kind,
-                start,
-                half_side: 0.0,
-            })
-            .collect();
-        self.moving = floor
-            .map(|_| false)
-            .into_iter()
-            .chain(scene.obstacles.iter().map(|s| s.motion().0.is_some()))
-            .collect();
+        self.rods = styles(frame.scene, &frame.system.rod);
+        self.shapes = shapes::of_scene(frame.scene);
     }
 
     /// A fresh record: empty samples, the planes' size from the rods' start.
@@ -211,9 +160,7 @@ impl UsdWriter {
             rods: vec![RodStreams::default(); self.rods.len()],
             moves: vec![String::new(); self.shapes.len()],
             half_sides: (self.shapes.iter())
-                .map(|s| {
-                    0.5 * shapes::PLANE_SPAN * total + (Shape::anchor(&s.start) - centre).norm()
-                })
+                .map(|s| s.half_side(total, &centre))
                 .collect(),
             ..Recorded::default()
         };
@@ -237,15 +184,13 @@ impl UsdWriter {
             let layout = Layout::of(rod, k);
             (streams.record(style, rod, layout, code, &mut self.pieces)).map_err(fmt_error)?;
         }
-        if self.moving.iter().any(|&m| m) {
+        if self.shapes.iter().any(|s| s.moving) {
+            // The floor (first, when there is one) never moves.
             let floor = self.shapes.len() - frame.scene.obstacles.len();
             let obstacles = super::scenery::obstacles_at(frame)?;
-            for (i, o) in obstacles
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| self.moving[floor + i])
-            {
-                Shape::record(&mut r.moves[floor + i], o, code).map_err(fmt_error)?;
+            let shapes = self.shapes[floor..].iter().zip(&mut r.moves[floor..]);
+            for ((_, moves), o) in shapes.zip(&obstacles).filter(|((s, _), _)| s.moving) {
+                Shape::record(moves, o, code).map_err(fmt_error)?;
             }
         }
         Ok(())
@@ -254,38 +199,10 @@ impl UsdWriter {
     /// The whole layer.
     fn layer(&self, frame: &Frame<'_>) -> Result<String, std::fmt::Error> {
         let r = &self.recorded;
-        let per_second = match frame.scene.solver.dt {
-            Some(dt) if frame.total_steps > 0 => 1.0 / dt,
-            _ => 1.0,
-        };
         let mut out = String::new();
-        let (start, end) = (
-            r.codes.first().copied().unwrap_or(0),
-            r.codes.last().copied().unwrap_or(0),
-        );
-        writeln!(out, "#usda 1.0\n(")?;
-        writeln!(
-            out,
-            "    customLayerData = {{\n        string generator = \"splinerod {}\"\n    }}",
-            env!("CARGO_PKG_VERSION")
-        )?;
-        writeln!(out, "    defaultPrim = \"World\"")?;
-        writeln!(out, "    doc = \"A splinerod run. Viewers draw points (float, uniform B-spline basis); the exact curves are splinerod:controlPoints, splinerod:knots and splinerod:degree (double).\"")?;
-        writeln!(
-            out,
-            "    endTimeCode = {end}\n    framesPerSecond = {}",
-            Num(per_second)
-        )?;
-        writeln!(out, "    metersPerUnit = 1\n    startTimeCode = {start}")?;
-        writeln!(
-            out,
-            "    timeCodesPerSecond = {}\n    upAxis = \"Y\"\n)\n",
-            Num(per_second)
-        )?;
-        writeln!(
-            out,
-            "def Xform \"World\"\n{{\n    custom double splinerod:time.timeSamples = {{"
-        )?;
+        header(&mut out, frame, &r.codes)?;
+        writeln!(out, "def Xform \"World\"\n{{")?;
+        writeln!(out, "    custom double splinerod:time.timeSamples = {{")?;
         for (code, t) in r.codes.iter().zip(&r.times) {
             writeln!(out, "        {code}: {},", Num(*t))?;
         }
@@ -294,14 +211,16 @@ impl UsdWriter {
             write_rod(&mut out, style, streams)?;
         }
         writeln!(out, "    }}\n\n    def Scope \"Obstacles\"\n    {{")?;
-        for ((shape, moves), half) in self.shapes.iter().zip(&r.moves).zip(&r.half_sides) {
-            let shape = Shape {
-                half_side: *half,
-                ..shape.clone()
-            };
-            shape.write(&mut out, Some(moves.as_str()).filter(|m| !m.is_empty()))?;
+        let shapes = self.shapes.iter().zip(&r.moves).zip(&r.half_sides);
+        for ((shape, moves), half) in shapes {
+            shape.write(
+                &mut out,
+                Some(moves.as_str()).filter(|m| !m.is_empty()),
+                *half,
+            )?;
         }
-        // Rigid bodies would follow here: `def Scope "Bodies"`, an Xform per body (shapes.rs).
+        // Rigid bodies, when scenes have them, follow here: `def Scope "Bodies"` with an
+        // Xform per body, its translate and orient time-sampled (see `shapes`).
         writeln!(out, "    }}\n}}")?;
         Ok(out)
     }
@@ -320,14 +239,64 @@ impl UsdWriter {
     }
 }
 
-/// The USD kind of an obstacle.
-fn kind(obstacle: &Obstacle) -> &'static str {
-    match obstacle {
-        Obstacle::Plane { .. } => "plane",
-        Obstacle::Sphere { .. } => "sphere",
-        Obstacle::Capsule { .. } => "capsule",
-    }
+/// The style of every rod of `scene` (its prims' names unique).
+fn styles(scene: &Scene, rod: &Rod) -> Vec<Style> {
+    let mut taken = BTreeSet::new();
+    let closed = rod.is_closed();
+    (0..scene.rod_count())
+        .map(|k| {
+            let spec = scene.rod_spec(k);
+            let name = spec.name.clone().unwrap_or_default();
+            let fallback = match scene.rod_count() {
+                1 => "rod".to_string(),
+                _ => format!("rod_{k}"),
+            };
+            let width = (spec.radius).map_or(DEFAULT_WIDTH * spec.rest_length, |r| 2.0 * r);
+            Style {
+                prim: unique(&mut taken, prim_name(&name, &fallback)),
+                name,
+                degree: rod.basis().degree(),
+                closed,
+                periodic: closed && scene.cuts.is_empty(),
+                width,
+                rest_length: spec.rest_length,
+            }
+        })
+        .collect()
 }
+
+/// The layer's header: its metadata (module docs), the time codes `codes` span.
+fn header(out: &mut String, frame: &Frame<'_>, codes: &[i64]) -> std::fmt::Result {
+    let per_second = match frame.scene.solver.dt {
+        Some(dt) if frame.total_steps > 0 => Num(1.0 / dt),
+        _ => Num(1.0),
+    };
+    let start = codes.first().copied().unwrap_or(0);
+    let end = codes.last().copied().unwrap_or(0);
+    let version = env!("CARGO_PKG_VERSION");
+    writeln!(out, "#usda 1.0\n(")?;
+    writeln!(out, "    customLayerData = {{")?;
+    writeln!(
+        out,
+        "        string generator = \"splinerod {version}\"\n    }}"
+    )?;
+    writeln!(out, "    defaultPrim = \"World\"")?;
+    writeln!(out, "    doc = \"{DOC}\"")?;
+    writeln!(
+        out,
+        "    endTimeCode = {end}\n    framesPerSecond = {per_second}"
+    )?;
+    writeln!(out, "    metersPerUnit = 1\n    startTimeCode = {start}")?;
+    writeln!(
+        out,
+        "    timeCodesPerSecond = {per_second}\n    upAxis = \"Y\"\n)\n"
+    )
+}
+
+/// The layer's `doc`.
+const DOC: &str = "A splinerod run. Viewers draw the float points with a uniform B-spline basis; \
+the exact curves are splinerod:controlPoints and splinerod:knots (double) of degree \
+splinerod:degree, per splinerod:curveVertexCounts.";
 
 /// `name`, or `name_2`, `name_3`, … if taken; marked taken.
 fn unique(taken: &mut BTreeSet<String>, name: String) -> String {

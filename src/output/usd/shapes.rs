@@ -22,6 +22,7 @@
 //! orientation), its contact shapes as child prims (see `write_transform`).
 
 use super::text::{quoted, tuple, Num, ATTRIBUTE, SAMPLE};
+use crate::Scene;
 use nalgebra::{UnitQuaternion, Vector3};
 use splinerod_core::Real;
 use splinerod_energies::Obstacle;
@@ -38,13 +39,50 @@ pub(super) struct Shape {
     pub prim: String,
     /// `floor`, `plane`, `sphere` or `capsule`.
     pub kind: &'static str,
-    /// The obstacle at the start.
+    /// The obstacle as the scene gives it (before any `path`).
     pub start: Obstacle,
-    /// Half the side of a plane's square, m.
-    pub half_side: Real,
+    /// Whether it moves (has a `path`).
+    pub moving: bool,
+}
+
+/// The floor (first, when `[contact]` has one) and every `[[obstacles]]` entry.
+pub(super) fn of_scene(scene: &Scene) -> Vec<Shape> {
+    let floor = (scene.contact.as_ref().filter(|c| c.enabled)).and_then(|c| c.floor);
+    let floor = floor.map(|h| Shape {
+        prim: "floor".into(),
+        kind: "floor",
+        start: Obstacle::Plane {
+            point: Vector3::new(0.0, h, 0.0),
+            normal: Vector3::y(),
+        },
+        moving: false,
+    });
+    let obstacles = scene.obstacles.iter().enumerate().map(|(i, spec)| {
+        let start = spec.obstacle();
+        let kind = match start {
+            Obstacle::Plane { .. } => "plane",
+            Obstacle::Sphere { .. } => "sphere",
+            Obstacle::Capsule { .. } => "capsule",
+        };
+        let moving = spec.motion().0.is_some();
+        let prim = format!("obstacle_{i}");
+        Shape {
+            prim,
+            kind,
+            start,
+            moving,
+        }
+    });
+    floor.into_iter().chain(obstacles).collect()
 }
 
 impl Shape {
+    /// Half the side of a plane's square: [`PLANE_SPAN`] / 2 × the rods' `total` rest
+    /// length plus the distance from its point to their `centre` of mass.
+    pub(super) fn half_side(&self, total: Real, centre: &Vector3<Real>) -> Real {
+        0.5 * PLANE_SPAN * total + (Self::anchor(&self.start) - centre).norm()
+    }
+
     /// The obstacle's reference point (the first translate).
     pub(super) fn anchor(obstacle: &Obstacle) -> Vector3<Real> {
         match *obstacle {
@@ -62,13 +100,19 @@ impl Shape {
         Ok(())
     }
 
-    /// The prim, with `moves` the translate's time samples (`None`: static).
-    pub(super) fn write(&self, out: &mut String, moves: Option<&str>) -> fmt::Result {
+    /// The prim, with `moves` the translate's time samples (`None`: static) and
+    /// `half_side` a plane's (see [`Shape::half_side`]).
+    pub(super) fn write(
+        &self,
+        out: &mut String,
+        moves: Option<&str>,
+        half_side: Real,
+    ) -> fmt::Result {
         let a = ATTRIBUTE;
         match self.start {
             Obstacle::Plane { normal, .. } => {
                 writeln!(out, "        def Mesh \"{}\"\n        {{", self.prim)?;
-                let s = self.half_side;
+                let s = half_side;
                 writeln!(out, "{a}int[] faceVertexCounts = [4]")?;
                 writeln!(out, "{a}int[] faceVertexIndices = [0, 1, 2, 3]")?;
                 let (m, p) = (Num(-s), Num(s));
