@@ -38,14 +38,21 @@
 //! * `custom double3[] splinerod:controlPoints` and `custom int[]
 //!   splinerod:curveVertexCounts`: every curve's control points;
 //! * `custom double[] splinerod:knots`: every curve's `n + degree + 1` knots, m of the
-//!   rod's material coordinate (see [`curves`] for closed and cut rods);
+//!   rod's material coordinate (a closed rod uncut: its unclamped periodic form, `m + d`
+//!   control points whose last `d` repeat the first and `m + 2d + 1` knots; a cut
+//!   closed rod's piece across the seam: knots past the period, up to `c + L`);
 //! * `custom int splinerod:degree`, `custom bool splinerod:closed`, `custom double
 //!   splinerod:restLength`, `custom string splinerod:name`.
 //!
 //! Curve `i` is `C(s) = Σ_j P_j N_{j,d}(s)` on its knots, `s` in `[t_d, t_n]`.
 //!
-//! **Obstacles** (`/World/Obstacles`): the floor and every `[[obstacles]]` entry as
-//! transformed primitives ([`shapes`]). Ensembles: member 0, as every output.
+//! **Obstacles** (`/World/Obstacles`): the floor (`floor`) and every `[[obstacles]]`
+//! entry (`obstacle_I`) as transformed primitives — planes and the floor a `Mesh`
+//! square, spheres `Sphere`, capsules `Capsule` — whose first op, `double3
+//! xformOp:translate`, is the obstacle's reference point (a plane's `point`, a
+//! sphere's `centre`, a capsule's `a`) where the simulation has it, time-sampled for
+//! an obstacle with a `path`; then `quatd xformOp:orient`. Ensembles: member 0, as
+//! every output.
 //!
 //! `points` is `point3f[]` because the schema says so: a layer with `point3d[] points`
 //! opens, and `UsdGeom.BasisCurves(prim).GetPointsAttr().Get(t)` returns the doubles
