@@ -71,4 +71,5 @@ mod snapshots;
 mod string_modes;
 mod tolerance;
 mod twist;
+mod usd;
 mod vtk;

@@ -1,6 +1,6 @@
 //! Checkpoints and resume at the command line: a run stopped at any step (by
 //! `--max-steps` or a signal) with `--checkpoint DIR` and continued by `splinerod resume
-//! DIR` writes the same JSON, stats CSV and ParaView files as the run never stopped, bit
+//! DIR` writes the same JSON, stats CSV, ParaView files and USD layer as the run never stopped, bit
 //! for bit but for wall-clock times — for every integrator, an adaptive scene, a scene
 //! with cuts, contact with friction, twist, several rods, an ensemble (and a shard of
 //! it) and a static solve, also when stopped on the step of a cut or of a knot change.
@@ -53,12 +53,13 @@ fn resumes_exactly_with(test: &str, scene: &Path, extra: &[&str], stops: &[usize
         let o = d.join(tag);
         std::fs::create_dir_all(&o).expect("dir");
         let args = [
-            "--json", "r.json", "--stats", "s.csv", "--vtk", "vtk", "--every", "7",
+            "--json", "r.json", "--stats", "s.csv", "--vtk", "vtk", "--every", "7", "--usd",
+            "u.usda",
         ];
         let args: Vec<String> = args
             .iter()
             .map(|a| match *a {
-                "r.json" | "s.csv" | "vtk" => o.join(a).display().to_string(),
+                "r.json" | "s.csv" | "vtk" | "u.usda" => o.join(a).display().to_string(),
                 a => a.to_string(),
             })
             .collect();
@@ -100,6 +101,8 @@ fn resumes_exactly_with(test: &str, scene: &Path, extra: &[&str], stops: &[usize
         names.sort();
         names
     };
+    let usd = |o: &Path| std::fs::read(o.join("u.usda")).expect("usd file");
+    assert!(usd(&whole) == usd(&parts), "{test}: the USD layer differs");
     assert_eq!(files(&whole), files(&parts), "{test}: VTK files");
     for name in files(&whole) {
         let read = |o: &Path| std::fs::read(o.join("vtk").join(&name)).expect("vtk file");

@@ -2,7 +2,7 @@
 //!
 //! * `splinerod run SCENE.toml [--json OUT] [--stats OUT.csv] [--frames DIR [--every K]
 //!   [--camera xy|xz|yz|oblique] [--svg] [--polygon] [--gif OUT.gif]] [--vtk DIR]`
-//!   [--shard K/N] [--max-steps N] [--allow-large]
+//!   [--usd OUT.usda] [--shard K/N] [--max-steps N] [--allow-large]
 //! * `splinerod merge OUT.json SHARD.json…` (the shards of a `--shard` ensemble run)
 //! * `splinerod report [--quick] --out DIR`
 //! * `splinerod bench [--quick] [--json OUT]`
@@ -16,7 +16,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use splinerod::core::Cancel;
-use splinerod::output::{picture, progress::Progress, stats::StatsWriter, vtk::VtkWriter};
+use splinerod::output::{
+    picture, progress::Progress, stats::StatsWriter, usd::UsdWriter, vtk::VtkWriter,
+};
 use splinerod::run::checkpoint::CheckpointPlan;
 use splinerod::run::control::{RunControl, STOP_GRACE};
 use splinerod::run::shard::Shard;
@@ -124,7 +126,7 @@ struct RunArgs {
     /// Directory for PNG pictures of the rod.
     #[arg(long)]
     frames: Option<PathBuf>,
-    /// Record every K-th step (pictures and VTK).
+    /// Record every K-th step (pictures, VTK and USD).
     #[arg(long, default_value_t = 1)]
     every: usize,
     /// Camera of the pictures: xy, xz, yz or oblique.
@@ -142,6 +144,10 @@ struct RunArgs {
     /// Directory for ParaView files (VTK PolyData and a PVD collection).
     #[arg(long)]
     vtk: Option<PathBuf>,
+    /// A USD layer (.usda): rods as time-sampled BasisCurves with their exact control
+    /// points and knots, obstacles as transformed primitives.
+    #[arg(long, value_name = "OUT.usda")]
+    usd: Option<PathBuf>,
     /// Runs only shard K of N of the `[ensemble]` (a contiguous block of members);
     /// merge the shards' `--json` files with `splinerod merge`.
     #[arg(long)]
@@ -323,6 +329,9 @@ fn observers(args: &RunArgs) -> Result<Vec<Box<dyn Observer>>, Error> {
     }
     if let Some(dir) = &args.vtk {
         list.push(Box::new(VtkWriter::new(dir, args.every)?));
+    }
+    if let Some(path) = &args.usd {
+        list.push(Box::new(UsdWriter::new(path, args.every)?));
     }
     Ok(list)
 }
