@@ -36,6 +36,7 @@ mod fit_least_squares;
 mod fit_run;
 mod fit_scene;
 mod friction;
+mod grippers;
 mod fuzz_scenes;
 mod hard_cases;
 mod integrator_energy;

@@ -37,7 +37,7 @@ pub(crate) fn build_members(
 }
 
 /// Prepares a member for its first stage: a static solve starts at the time the grabs,
-/// driven pins, turning clamps, moving obstacles and keyframed loads reach their final
+/// driven pins, turning clamps, grippers, moving obstacles and keyframed loads reach their final
 /// targets, with every cut made; a dynamic one with the cuts due at time zero.
 pub(crate) fn prepare(
     scene: &Scene,
@@ -47,6 +47,8 @@ pub(crate) fn prepare(
     if scene.solver.method == Method::Static {
         let grabs = scene.grabs.iter().map(|g| g.end_time);
         let paths = sim.system.drivers.iter().map(|d| d.path.end_time());
+        let grippers = sim.system.grippers.iter();
+        let poses = grippers.filter_map(|g| Some(g.path.as_ref()?.end_time()));
         let loads = sim.system.loads.iter().filter_map(|l| l.path.as_ref());
         let loads = loads.map(|p| p.end_time());
         let turns = scene
@@ -62,6 +64,7 @@ pub(crate) fn prepare(
             .chain(loads)
             .chain(moving)
             .chain(turns)
+            .chain(poses)
             .fold(0.0, Real::max);
         (sim.time, sim.system.time) = (t, t);
         cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))

@@ -39,6 +39,7 @@
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
 mod closed;
+pub mod grip;
 pub mod holonomy;
 mod window;
 
@@ -112,6 +113,10 @@ pub struct Twisting {
     pub turn: Real,
     start: Frame,
     end: Frame,
+    /// The clamp frames before any gripper turned them ([`Twisting::grip`]).
+    base: [Frame; 2],
+    /// The grippers' rolls about the clamp axes (start, end), rad: part of `turn`.
+    rolls: [Real; 2],
     /// Holonomies of the two polygons in the untwisted state, ψ₀.
     rest: [Real; 2],
     /// The continuous values of the polygons' ψ at the last step start (the branches
@@ -136,6 +141,8 @@ impl Clone for Twisting {
             turn: self.turn,
             start: self.start,
             end: self.end,
+            base: self.base,
+            rolls: self.rolls,
             rest: self.rest,
             branch: self.branch,
             released: self.released,
@@ -153,6 +160,19 @@ impl Twisting {
     pub fn between_ends(stiffness: Real, rod: &Rod, start: Frame) -> Result<Self, CoreError> {
         check_degree(rod)?;
         let end_axis = rod.tangent(rod.material().rest_length)?;
+        Self::between_axes(stiffness, rod, start, end_axis)
+    }
+
+    /// [`Twisting::between_ends`] with the end clamp's axis `end_axis` (a clamp holding
+    /// a direction of its own; the rod's tangent there in `between_ends`): the end
+    /// director is the start's parallel-transported along the rod and on to `end_axis`.
+    pub fn between_axes(
+        stiffness: Real,
+        rod: &Rod,
+        start: Frame,
+        end_axis: Vector3<Real>,
+    ) -> Result<Self, CoreError> {
+        check_degree(rod)?;
         let mut samples = Samples::default();
         samples.prepare(rod);
         let director = transported(&samples, FINE, &start, &end_axis);
@@ -181,6 +201,8 @@ impl Twisting {
             turn,
             start,
             end,
+            base: [start, end],
+            rolls: [0.0; 2],
             rest: [0.0; 2],
             branch: [0.0; 2],
             released: false,
@@ -208,9 +230,31 @@ impl Twisting {
         self
     }
 
-    /// The clamp frames (start, end) when the turn is zero.
+    /// The clamp frames (start, end) when the turn is zero (carried by their grippers,
+    /// [`Twisting::grip`]).
     pub fn frames(&self) -> (Frame, Frame) {
         (self.start, self.end)
+    }
+
+    /// Carries clamp `end`'s frame (0: at `s = 0`, 1: at `s = L`) with its gripper's
+    /// `rotation` against its start ([`grip::carried`]: axis \(R a_0\), director the
+    /// swing \(M d_0\)) and sets its roll to `roll` (rad; the branch of
+    /// [`grip::carried`]'s φ the caller follows), which adds to the turn Φ (the start's
+    /// with a minus sign). A rotation that is not finite, or `end > 1`, changes nothing.
+    pub fn grip(&mut self, end: usize, rotation: &Matrix3<Real>, roll: Real) {
+        let Some(base) = self.base.get(end) else {
+            return;
+        };
+        let (Ok((frame, _)), true) = (grip::carried(base, rotation), roll.is_finite()) else {
+            return;
+        };
+        let sign = if end == 0 { -1.0 } else { 1.0 };
+        self.turn += sign * (roll - self.rolls[end]);
+        self.rolls[end] = roll;
+        match end {
+            0 => self.start = frame,
+            _ => self.end = frame,
+        }
     }
 
     /// Whether a cut released the twist.
@@ -423,12 +467,16 @@ impl Lifecycle for Twisting {
         let [start, end] = &self.schedules;
         if start.is_some() || end.is_some() {
             let angle = |s: &Option<Keyframes<Real>>| s.as_ref().map_or(0.0, |k| k.at(t));
-            self.turn = angle(end) - angle(start);
+            self.turn = angle(end) - angle(start) + self.rolls[1] - self.rolls[0];
         }
     }
 
     fn time_dependent(&self) -> bool {
         self.schedules.iter().any(Option::is_some)
+    }
+
+    fn grip(&mut self, end: usize, rotation: &Matrix3<Real>, roll: Real) {
+        Twisting::grip(self, end, rotation, roll);
     }
 
     fn save_state(&self, out: &mut SavedState) {
