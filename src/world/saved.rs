@@ -103,9 +103,7 @@ pub struct SimulationState {
     pub pins: Vec<[Real; 3]>,
     /// Each grab's state.
     pub grabs: Vec<GrabState>,
-    /// Each gripper's pose (`None`: never moved); empty if no gripper moved, so the
-    /// checkpoints of scenes without posed clamps are as they were.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    /// Each gripper's pose (`None`: never moved); empty if no gripper moved.
     pub grippers: Vec<Option<PoseState>>,
     /// Each energy's own state, in the system's order.
     pub energies: Vec<Numbers>,
