@@ -12,6 +12,7 @@ mod adaptivity;
 mod arrays;
 mod bundled;
 mod calibration;
+mod clamps;
 mod driver;
 mod errors;
 mod integrator;

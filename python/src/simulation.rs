@@ -334,6 +334,25 @@ impl Simulation {
         Ok(())
     }
 
+    /// Moves the gripper of clamp `index` (its `[[pins]]` entry: `clamp = true` at an end
+    /// of a rod with clamped knots) in `member` (all if `None`), from the next step on:
+    /// the clamp point to `position` (absolute, m), the gripper turned by `rotation`
+    /// against its start (a `(3, 3)` rotation matrix, or a quaternion `(w, x, y, z)`),
+    /// about the clamp point. The roll about the tangent is followed from the last call:
+    /// between calls it must change by less than π. A clamp with a scene `pose` is moved
+    /// by it again at the next step.
+    #[pyo3(signature = (index, position, rotation, member = None))]
+    fn set_clamp_pose(
+        &mut self,
+        index: usize,
+        position: &Bound<'_, PyAny>,
+        rotation: &Bound<'_, PyAny>,
+        member: Option<usize>,
+    ) -> PyResult<()> {
+        let members = self.selected(position.py(), member)?;
+        crate::clamps::set_clamp_pose(&mut self.driver, index, position, rotation, members)
+    }
+
     /// Forces the pins exert on member 0's rod after the last step, `(k, 3)`, N (a
     /// scene: one per `[[pins]]` entry, as the JSON's `pin_forces`).
     #[getter]
@@ -345,6 +364,19 @@ impl Simulation {
             })
         });
         points_array(py, &forces.unwrap_or_default())
+    }
+
+    /// Torques the pins exert on member 0's rod about their points after the last step,
+    /// `(k, 3)`, N·m, one per `[[pins]]` entry (as the JSON's `pin_torques`: a clamp's
+    /// bending and twisting moment, zero for a plain pin; the gripper feels the
+    /// negative); empty for a simulation built in code.
+    #[getter]
+    fn pin_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
+        let torques = match &self.driver {
+            Driver::Scene(run) => run.pin_torques(0).transpose().py_err(py)?,
+            Driver::Code { .. } => None,
+        };
+        Ok(points_array(py, &torques.unwrap_or_default()))
     }
 
     /// Material points at coordinates `s` (m, a number or a 1-D array) of `member`:
