@@ -57,13 +57,19 @@ fn off_rotated(text: &str, rotation: [f64; 3]) -> f64 {
     let s = &result.samples;
     s.s.iter()
         .zip(&s.positions)
-        .map(|(s, p)| (r * nalgebra::Vector3::new(*s, 0.0, 0.0) - nalgebra::Vector3::from(*p)).norm())
+        .map(|(s, p)| {
+            (r * nalgebra::Vector3::new(*s, 0.0, 0.0) - nalgebra::Vector3::from(*p)).norm()
+        })
         .fold(0.0, f64::max)
 }
 
 #[test]
 fn a_gripper_turned_90_degrees_carries_a_weightless_rod_straight() {
-    for rotation in [[0.0, 0.0, PI / 2.0], [0.0, -PI / 2.0, 0.0], [0.0, 0.9, -1.3]] {
+    for rotation in [
+        [0.0, 0.0, PI / 2.0],
+        [0.0, -PI / 2.0, 0.0],
+        [0.0, 0.9, -1.3],
+    ] {
         let off = off_rotated(&turning(rotation, 2.0), rotation);
         println!("gripper turned by {rotation:?}: the rod {off:.2e} m off the rotated line");
         assert!(off < 1e-9, "{rotation:?}: {off:e}");
@@ -117,8 +123,14 @@ fn a_static_cantilever_clamp_holds_the_weight_and_its_moment() {
         assert!((force[1] - weight).abs() < 1e-9 * weight, "{force:?}");
         assert!(force[0].abs() + force[2].abs() < 1e-9 * weight, "{force:?}");
         // The clamp holds the weight's moment about z (the weight's own is −μgL²/2 ẑ).
-        assert!((torque[2] - moment).abs() < 1e-6 * moment, "{torque:?} vs {moment}");
-        assert!(torque[0].abs() + torque[1].abs() < 1e-9 * moment, "{torque:?}");
+        assert!(
+            (torque[2] - moment).abs() < 1e-6 * moment,
+            "{torque:?} vs {moment}"
+        );
+        assert!(
+            torque[0].abs() + torque[1].abs() < 1e-9 * moment,
+            "{torque:?}"
+        );
     }
     // The gripper turned up by α in a static solve: the moment is μgL²/2 · cos α, to the
     // deflection across the rod, which now shortens the arm at first order (δ/L ≈ 4e-5).
@@ -129,19 +141,25 @@ fn a_static_cantilever_clamp_holds_the_weight_and_its_moment() {
     let pose = format!(
         "pose = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, {alpha}]]"
     );
-    let result = run(&Scene::from_toml(&stiff_cantilever(&pose, 1e6)).expect("scene")).expect("run");
+    let result =
+        run(&Scene::from_toml(&stiff_cantilever(&pose, 1e6)).expect("scene")).expect("run");
     let (force, torque) = (result.pin_forces[0], result.pin_torques[0]);
     let exact = moment * alpha.cos();
     println!("turned by {alpha}: clamp force {force:?}, torque {torque:?} (exact {exact})");
     assert!((force[1] - weight).abs() < 1e-6 * weight, "{force:?}");
-    assert!((torque[2] - exact).abs() < 1e-4 * exact, "{torque:?} vs {exact}");
+    assert!(
+        (torque[2] - exact).abs() < 1e-4 * exact,
+        "{torque:?} vs {exact}"
+    );
 }
 
 /// A straight rod along x clamped at both ends, with twist; the end clamp rolled by
 /// `roll` (rad) about x by its gripper (`pose`) or by `turn`, over 1 s.
 fn rolled(roll: f64, by_pose: bool, method: &str) -> String {
     let end = if by_pose {
-        format!("pose = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0, {roll}, 0.0, 0.0]]")
+        format!(
+            "pose = [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0, {roll}, 0.0, 0.0]]"
+        )
     } else {
         format!("turn = [[0.0, 0.0], [1.0, {roll}]]")
     };
@@ -181,10 +199,10 @@ duration = 1.2
 fn a_gripper_rolled_a_full_turn_twists_the_rod_a_full_turn() {
     let exact = 1.3 * 2.0 * PI / 0.8;
     for method in ["static", "implicit-euler"] {
-        let posed = run(&Scene::from_toml(&rolled(2.0 * PI, true, method)).expect("scene"))
-            .expect("run");
-        let turned = run(&Scene::from_toml(&rolled(2.0 * PI, false, method)).expect("scene"))
-            .expect("run");
+        let posed =
+            run(&Scene::from_toml(&rolled(2.0 * PI, true, method)).expect("scene")).expect("run");
+        let turned =
+            run(&Scene::from_toml(&rolled(2.0 * PI, false, method)).expect("scene")).expect("run");
         let twist = posed.twist.expect("twist");
         println!(
             "{method}: rolled 2π: twist {:.12}, moment {:.12} (exact {exact:.12}); turned: moment {:.12}; torques {:?}",
@@ -193,7 +211,11 @@ fn a_gripper_rolled_a_full_turn_twists_the_rod_a_full_turn() {
             turned.twist.expect("twist").moment,
             posed.pin_torques
         );
-        assert!((twist.moment - exact).abs() < 1e-6 * exact, "{}", twist.moment);
+        assert!(
+            (twist.moment - exact).abs() < 1e-6 * exact,
+            "{}",
+            twist.moment
+        );
         assert!((twist.twist - 2.0 * PI).abs() < 1e-6 * 2.0 * PI);
         assert!((posed.pin_torques[1][0] - exact).abs() < 1e-6 * exact);
         assert!((posed.pin_torques[0][0] + exact).abs() < 1e-6 * exact);
@@ -207,15 +229,32 @@ fn bad_clamp_poses_name_the_field() {
     let pose = |rows: &str| cantilever(&format!("pose = [{rows}]"));
     let rest = "[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]";
     let cases = [
-        (pose(&format!("{rest}, [1.0, 0.0, 0.0, 0.0, nan, 0.0, 0.0]")), "pins[0].pose[1][4]"),
-        (pose(&format!("{rest}, [1.0, 0.0, inf, 0.0, 0.0, 0.0, 0.0]")), "pins[0].pose[1][2]"),
         (
-            pose(&format!("{rest}, [1.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0]")),
+            pose(&format!("{rest}, [1.0, 0.0, 0.0, 0.0, nan, 0.0, 0.0]")),
+            "pins[0].pose[1][4]",
+        ),
+        (
+            pose(&format!("{rest}, [1.0, 0.0, inf, 0.0, 0.0, 0.0, 0.0]")),
+            "pins[0].pose[1][2]",
+        ),
+        (
+            pose(&format!(
+                "{rest}, [1.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0], [0.5, 0.0, 0.0, 0.0, 0.2, 0.0, 0.0]"
+            )),
             "pins[0].pose[2][0]",
         ),
-        (pose("[0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0]"), "pins[0].pose[0]"),
-        (cantilever("direction = [0.0, 0.0, 0.0]"), "pins[0].direction"),
-        (cantilever("direction = [nan, 1.0, 0.0]"), "pins[0].direction"),
+        (
+            pose("[0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0]"),
+            "pins[0].pose[0]",
+        ),
+        (
+            cantilever("direction = [0.0, 0.0, 0.0]"),
+            "pins[0].direction",
+        ),
+        (
+            cantilever("direction = [nan, 1.0, 0.0]"),
+            "pins[0].direction",
+        ),
         (
             cantilever(&format!("path = [[0.0, 0.0, 0.0, 0.0]]\npose = [{rest}]")),
             "pins[0].pose",
@@ -225,7 +264,10 @@ fn bad_clamp_poses_name_the_field() {
             "pins[0].pose",
         ),
         (
-            cantilever("").replace("at = 0.0\nclamp = true", &format!("at = 0.5\nclamp = true\npose = [{rest}]")),
+            cantilever("").replace(
+                "at = 0.0\nclamp = true",
+                &format!("at = 0.5\nclamp = true\npose = [{rest}]"),
+            ),
             "pins[0].pose",
         ),
     ];

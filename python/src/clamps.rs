@@ -62,7 +62,9 @@ pub fn set_clamp_pose(
     }
     for (i, k, pose) in poses {
         if let Some(sim) = driver.sim_mut(i) {
-            sim.system.set_gripper_pose(k, pose).map_err(|e| to_py(py, e))?;
+            sim.system
+                .set_gripper_pose(k, pose)
+                .map_err(|e| to_py(py, e))?;
         }
     }
     Ok(())

@@ -248,7 +248,12 @@ impl Scene {
 
     /// `system` with a gripper on the exact clamp of `[[pins]]` entry `i` (its tangent
     /// pin `tangent`), following the entry's `pose`.
-    fn with_gripper(&self, system: RodSystem, i: usize, tangent: usize) -> Result<RodSystem, Error> {
+    fn with_gripper(
+        &self,
+        system: RodSystem,
+        i: usize,
+        tangent: usize,
+    ) -> Result<RodSystem, Error> {
         let spec = &self.pins[i];
         let rod = &system.rod;
         let at = spec.at * self.rod.rest_length;
@@ -292,8 +297,8 @@ impl Scene {
                 .map(|k| crate::world::path::schedule(k, pin.interpolation, &field))
                 .transpose()
         };
-        let twisting =
-            Twisting::between_axes(gj, rod, frame, end_axis)?.with_turns(schedule(first)?, schedule(last)?);
+        let twisting = Twisting::between_axes(gj, rod, frame, end_axis)?
+            .with_turns(schedule(first)?, schedule(last)?);
         Ok(Some(twisting))
     }
 

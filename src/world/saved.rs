@@ -268,12 +268,19 @@ fn gripper_states(system: &crate::RodSystem) -> Vec<Option<PoseState>> {
             roll: p.roll,
         }
     };
-    system.grippers.iter().map(|g| g.held.as_ref().map(state)).collect()
+    system
+        .grippers
+        .iter()
+        .map(|g| g.held.as_ref().map(state))
+        .collect()
 }
 
 /// Puts the saved poses back on the grippers, their pins and energies (before the
 /// energies read their own state, which already counts the rolls).
-fn restore_grippers(system: &mut crate::RodSystem, saved: &[Option<PoseState>]) -> Result<(), Error> {
+fn restore_grippers(
+    system: &mut crate::RodSystem,
+    saved: &[Option<PoseState>],
+) -> Result<(), Error> {
     if saved.is_empty() {
         return Ok(());
     }
