@@ -1,16 +1,66 @@
-//! `Simulation.set_clamp_pose`: a robot's controller moving a clamp's gripper between
-//! steps ([`splinerod::world::gripper`]): the clamp point to an absolute position, the
-//! gripper turned by a rotation (a 3×3 matrix, or a unit quaternion `(w, x, y, z)`)
-//! against its start.
+//! Moving pins between steps: `Simulation.set_pin`, and `Simulation.set_clamp_pose`, a
+//! robot's controller moving a clamp's gripper ([`splinerod::world::gripper`]): the
+//! clamp point to an absolute position, the gripper turned by a rotation (a 3×3 matrix,
+//! or a unit quaternion `(w, x, y, z)`) against its start.
 
 use crate::arrays::{float_array, vector_from};
 use crate::driver::Driver;
-use crate::errors::{scene_error, to_py};
-use nalgebra::Matrix3;
+use crate::errors::{scene_error, shield, to_py, IntoPyResult};
+use nalgebra::{Matrix3, Vector3};
 use numpy::PyUntypedArrayMethods;
 use pyo3::prelude::*;
 use splinerod::world::gripper::{check_rotation, quaternion_rotation};
 use splinerod::Real;
+
+/// Moves pin `index` to `position` (m) in each member of `members` (a clamp's tangent
+/// pin with it); `SceneError` naming `index` or `position`.
+pub fn set_pin(
+    driver: &mut Driver,
+    index: usize,
+    position: &Bound<'_, PyAny>,
+    members: std::ops::Range<usize>,
+) -> PyResult<()> {
+    let py = position.py();
+    let target = vector_from(position, "position")?;
+    for i in members {
+        let pins = &driver.sims()[i].system.pins;
+        let Some(pin) = pins.get(index).copied() else {
+            let message = format!("`index` = {index}: the rod has {} pin(s)", pins.len());
+            return Err(scene_error(py, Some("index"), message));
+        };
+        let shift = target - pin.position;
+        if let Some(sim) = driver.sim_mut(i) {
+            for (j, p) in sim.system.pins.iter_mut().enumerate() {
+                if j == index || (p.tangent && p.at == pin.at) {
+                    p.position += shift;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The forces the pins exert on member 0's rod after the last step, N (a scene: one per
+/// `[[pins]]` entry).
+pub fn pin_forces(driver: &Driver) -> Vec<Vector3<Real>> {
+    let forces = shield(|| {
+        Ok(match driver {
+            Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
+            Driver::Code { sim, .. } => sim.integrator.pin_forces(),
+        })
+    });
+    forces.unwrap_or_default()
+}
+
+/// The torques the `[[pins]]` entries exert on member 0's rod about their points after
+/// the last step, N·m; empty for a simulation built in code.
+pub fn pin_torques(py: Python<'_>, driver: &Driver) -> PyResult<Vec<Vector3<Real>>> {
+    let torques = match driver {
+        Driver::Scene(run) => run.pin_torques(0).transpose().py_err(py)?,
+        Driver::Code { .. } => None,
+    };
+    Ok(torques.unwrap_or_default())
+}
 
 /// The rotation `obj` stands for: a `(3, 3)` proper rotation matrix or a quaternion
 /// `(w, x, y, z)` (normalised); `SceneError` (a `ValueError`) naming `rotation`
