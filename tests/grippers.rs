@@ -70,10 +70,41 @@ fn a_gripper_turned_90_degrees_carries_a_weightless_rod_straight() {
         [0.0, -PI / 2.0, 0.0],
         [0.0, 0.9, -1.3],
     ] {
-        let off = off_rotated(&turning(rotation, 2.0), rotation);
-        println!("gripper turned by {rotation:?}: the rod {off:.2e} m off the rotated line");
-        assert!(off < 1e-9, "{rotation:?}: {off:e}");
+        for method in ["implicit-euler", "static"] {
+            let text =
+                turning(rotation, 2.0).replace("\"implicit-euler\"", &format!("\"{method}\""));
+            let off = off_rotated(&text, rotation);
+            println!("{method}: gripper turned by {rotation:?}: the rod {off:.2e} m off the rotated line");
+            assert!(off < 1e-9, "{method}, {rotation:?}: {off:e}");
+        }
     }
+    // The clamp at the far end (s = L, at x = 1): the rod turns about it.
+    let text = turning([0.0, 0.0, PI / 2.0], 2.0).replace("at = 0.0\nclamp", "at = 1.0\nclamp");
+    let result = run(&Scene::from_toml(&text).expect("scene")).expect("run");
+    let s = &result.samples;
+    let off = s.s.iter().zip(&s.positions).map(|(s, p)| {
+        (nalgebra::Vector3::new(1.0, s - 1.0, 0.0) - nalgebra::Vector3::from(*p)).norm()
+    });
+    let off = off.fold(0.0, f64::max);
+    println!("clamp at s = L turned by 90° about z: {off:.2e} m off");
+    assert!(off < 1e-9, "{off:e}");
+}
+
+#[test]
+fn a_clamp_direction_bends_the_rod_into_it() {
+    // A weightless rod along x whose clamp holds (1, 1, 0): straight along it at rest.
+    let base = turning([0.0; 3], 2.0);
+    let lines = base
+        .lines()
+        .filter(|l| !l.starts_with("pose") && !l.starts_with("interp"));
+    let text = lines
+        .collect::<Vec<_>>()
+        .join("\n")
+        .replace("clamp = true", "clamp = true\ndirection = [1.0, 1.0, 0.0]")
+        .replace("\"implicit-euler\"", "\"static\"");
+    let off = off_rotated(&text, [0.0, 0.0, PI / 4.0]);
+    println!("clamp direction (1, 1, 0): the rod {off:.2e} m off the line along it");
+    assert!(off < 1e-9, "{off:e}");
 }
 
 /// A horizontal cantilever along x under gravity −y, clamped at s = 0, solved static.

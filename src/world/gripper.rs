@@ -119,6 +119,19 @@ impl PosePath {
     pub fn end_time(&self) -> Real {
         self.0.end_time()
     }
+
+    /// How far the gripper turns from time 0 to `t`, rad: the sum of the angles between
+    /// its rotations at 64 evenly spaced times and at the keyframes in between.
+    pub fn turning(&self, t: Real) -> Real {
+        let mut times: Vec<Real> = (0..=64).map(|k| t * k as Real / 64.0).collect();
+        times.extend(self.0.times().iter().copied().filter(|&k| k < t));
+        times.sort_by(Real::total_cmp);
+        let rotation = |time: Real| Rotation3::new(self.at(time).1);
+        let pairs = times.windows(2);
+        pairs
+            .map(|w| rotation(w[0]).angle_to(&rotation(w[1])))
+            .sum()
+    }
 }
 
 /// A gripper holding an exact clamp (module docs).
