@@ -26,6 +26,7 @@ pub const SCENES: &[(&str, &str)] = &[
         include_str!("../scenes/grab_adaptive.toml"),
     ),
     ("grab_uniform", include_str!("../scenes/grab_uniform.toml")),
+    ("gripper_turn", include_str!("../scenes/gripper_turn.toml")),
     (
         "hanging_cable",
         include_str!("../scenes/hanging_cable.toml"),

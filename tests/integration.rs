@@ -37,6 +37,7 @@ mod fit_run;
 mod fit_scene;
 mod friction;
 mod fuzz_scenes;
+mod grippers;
 mod hard_cases;
 mod integrator_energy;
 mod kept_lanes;

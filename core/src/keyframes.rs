@@ -71,6 +71,11 @@ where
         (self.times[0], self.values[0])
     }
 
+    /// The keyframes' times, increasing.
+    pub fn times(&self) -> &[Real] {
+        &self.times
+    }
+
     /// The last keyframe's time.
     pub fn end_time(&self) -> Real {
         self.times[self.times.len() - 1]

@@ -17,7 +17,7 @@
 //! lists every field); no decorator is edited by hand.
 
 use crate::{Energy, EnergySummary, LaneTerm};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{CoreError, KnotMap, Real, Rod, SavedState, StateReader};
 
 /// The capabilities of one energy, each `None` when it does not have it (the default).
@@ -65,6 +65,14 @@ pub trait Lifecycle: Send + Sync {
     /// [`time_dependent`](Lifecycle::time_dependent).
     fn drive(&mut self, t: Real) {
         let _ = t;
+    }
+
+    /// Called when the gripper holding the clamp at end `end` of the rod (0: `s = 0`,
+    /// 1: `s = L`) moved: its `rotation` against its start and its `roll` about the
+    /// carried axis (rad, on a continuous branch; [`crate::twisting::grip`]). An energy
+    /// measured against the clamps' frames (twist) carries them. Default: nothing.
+    fn grip(&mut self, end: usize, rotation: &Matrix3<Real>, roll: Real) {
+        let _ = (end, rotation, roll);
     }
 
     /// Whether [`drive`](Lifecycle::drive) changes this energy (energy-conserving

@@ -29,7 +29,7 @@ use crate::capabilities::{
     Capabilities, HessianRemainder, Interaction, LaneForm, Lifecycle, Summary, Tension,
 };
 use crate::{Energy, EnergySummary, LaneTerm, Parameters};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use splinerod_core::{CoreError, KnotMap, Real, Rod, SavedState, StateReader};
 
 /// Where a decorator's inner rod sits in the rod it is evaluated on.
@@ -136,6 +136,12 @@ impl<D: Decorator> Lifecycle for D {
     fn drive(&mut self, t: Real) {
         if let Some(l) = self.inner_mut().lifecycle_mut() {
             l.drive(t);
+        }
+    }
+
+    fn grip(&mut self, end: usize, rotation: &Matrix3<Real>, roll: Real) {
+        if let Some(l) = self.inner_mut().lifecycle_mut() {
+            l.grip(end, rotation, roll);
         }
     }
 

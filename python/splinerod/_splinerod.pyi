@@ -98,8 +98,20 @@ class Simulation:
     @property
     def pins(self) -> _Points: ...
     def set_pin(self, index: int, position: _ArrayLike, member: Optional[int] = None) -> None: ...
+    def set_clamp_pose(
+        self,
+        index: int,
+        position: _ArrayLike,
+        rotation: _ArrayLike,
+        member: Optional[int] = None,
+    ) -> None:
+        """Moves the gripper of clamp `index` from the next step on: the clamp point to
+        `position` (absolute, m), the gripper turned by `rotation` against its start (a
+        (3, 3) rotation matrix or a quaternion (w, x, y, z)) about the clamp point."""
     @property
     def pin_forces(self) -> _Points: ...
+    @property
+    def pin_torques(self) -> _Points: ...
     @overload
     def positions(self, s: float, member: int = 0) -> _Points: ...
     @overload

@@ -39,7 +39,7 @@ pub fn values_array<'py>(py: Python<'py>, values: Vec<Real>) -> Bound<'py, PyArr
 }
 
 /// The float array `obj` (any array-like), or `SceneError` naming `field`.
-fn float_array<'py>(
+pub(crate) fn float_array<'py>(
     obj: &Bound<'py, PyAny>,
     field: &str,
 ) -> PyResult<PyArrayLikeDyn<'py, Real, AllowTypeChange>> {

@@ -17,6 +17,7 @@ mod errors;
 mod integrator;
 mod interrupt;
 mod model;
+mod pins;
 mod scene;
 mod simulation;
 mod system;

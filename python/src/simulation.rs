@@ -314,37 +314,46 @@ impl Simulation {
         position: &Bound<'_, PyAny>,
         member: Option<usize>,
     ) -> PyResult<()> {
-        let py = position.py();
-        let target = crate::arrays::vector_from(position, "position")?;
-        for i in self.selected(py, member)? {
-            let pins = &self.driver.sims()[i].system.pins;
-            let Some(pin) = pins.get(index).copied() else {
-                let message = format!("`index` = {index}: the rod has {} pin(s)", pins.len());
-                return Err(scene_error(py, Some("index"), message));
-            };
-            let shift = target - pin.position;
-            if let Some(sim) = self.driver.sim_mut(i) {
-                for (j, p) in sim.system.pins.iter_mut().enumerate() {
-                    if j == index || (p.tangent && p.at == pin.at) {
-                        p.position += shift;
-                    }
-                }
-            }
-        }
-        Ok(())
+        let members = self.selected(position.py(), member)?;
+        crate::pins::set_pin(&mut self.driver, index, position, members)
+    }
+
+    /// Moves the gripper of clamp `index` (its `[[pins]]` entry: `clamp = true` at an end
+    /// of a rod with clamped knots) in `member` (all if `None`), from the next step on:
+    /// the clamp point to `position` (absolute, m), the gripper turned by `rotation`
+    /// against its start (a `(3, 3)` rotation matrix, or a quaternion `(w, x, y, z)`),
+    /// about the clamp point. The roll about the tangent is followed from the last call:
+    /// between calls it must change by less than π. A clamp with a scene `pose` is moved
+    /// by it again at the next step.
+    #[pyo3(signature = (index, position, rotation, member = None))]
+    fn set_clamp_pose(
+        &mut self,
+        index: usize,
+        position: &Bound<'_, PyAny>,
+        rotation: &Bound<'_, PyAny>,
+        member: Option<usize>,
+    ) -> PyResult<()> {
+        let members = self.selected(position.py(), member)?;
+        crate::pins::set_clamp_pose(&mut self.driver, index, position, rotation, members)
     }
 
     /// Forces the pins exert on member 0's rod after the last step, `(k, 3)`, N (a
     /// scene: one per `[[pins]]` entry, as the JSON's `pin_forces`).
     #[getter]
     fn pin_forces<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
-        let forces = shield(|| {
-            Ok(match &self.driver {
-                Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
-                Driver::Code { sim, .. } => sim.integrator.pin_forces(),
-            })
-        });
-        points_array(py, &forces.unwrap_or_default())
+        points_array(py, &crate::pins::pin_forces(&self.driver))
+    }
+
+    /// Torques the pins exert on member 0's rod about their points after the last step,
+    /// `(k, 3)`, N·m, one per `[[pins]]` entry (as the JSON's `pin_torques`: a clamp's
+    /// bending and twisting moment, zero for a plain pin; the gripper feels the
+    /// negative); empty for a simulation built in code.
+    #[getter]
+    fn pin_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
+        Ok(points_array(
+            py,
+            &crate::pins::pin_torques(py, &self.driver)?,
+        ))
     }
 
     /// Material points at coordinates `s` (m, a number or a 1-D array) of `member`:

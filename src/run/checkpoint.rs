@@ -41,8 +41,9 @@ use std::path::{Path, PathBuf};
 /// at the start of the last step, so that a run resumed at its end reports the same
 /// final error estimate; 4: the checksum over the file and the scene text's hash, the
 /// kernel set, and the solver totals' steps solved alone per reason; 5: the count of
-/// steps with a hinge and the estimate's spread; 6: each probe's rod).
-pub const VERSION: u32 = 6;
+/// steps with a hinge and the estimate's spread; 6: each probe's rod; 7: the grippers'
+/// poses).
+pub const VERSION: u32 = 7;
 /// The first format version with a checksum; older files are refused as such.
 const FIRST_CHECKSUMMED: u32 = 4;
 /// Bytes of the checksum at the end of the file.

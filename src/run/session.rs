@@ -135,6 +135,18 @@ impl SceneRun {
         Some(forces.into_iter().map(Vector3::from).collect())
     }
 
+    /// The torque each `[[pins]]` entry exerts on member `index`'s rod about its point
+    /// after the last stage, N·m (as the JSON's `pin_torques`, but one per entry even
+    /// when all are zero); `None` past the last member.
+    pub fn pin_torques(&self, index: usize) -> Option<Result<Vec<Vector3<Real>>, Error>> {
+        let sim = self.members().get(index)?;
+        let torques = crate::run::pins::pin_torques(&self.scene, sim).map(|mut t| {
+            t.resize(self.scene.pins.len(), [0.0; 3]);
+            t.into_iter().map(Vector3::from).collect()
+        });
+        Some(torques)
+    }
+
     /// What `splinerod run` would report had the run ended after the stages made so far
     /// (marked interrupted before the scene's duration). The final records (error
     /// estimate, knot) are made on a copy of the members restored from their saved

@@ -37,7 +37,7 @@ pub(crate) fn build_members(
 }
 
 /// Prepares a member for its first stage: a static solve starts at the time the grabs,
-/// driven pins, turning clamps, moving obstacles and keyframed loads reach their final
+/// driven pins, turning clamps, grippers, moving obstacles and keyframed loads reach their final
 /// targets, with every cut made; a dynamic one with the cuts due at time zero.
 pub(crate) fn prepare(
     scene: &Scene,
@@ -47,6 +47,8 @@ pub(crate) fn prepare(
     if scene.solver.method == Method::Static {
         let grabs = scene.grabs.iter().map(|g| g.end_time);
         let paths = sim.system.drivers.iter().map(|d| d.path.end_time());
+        let grippers = sim.system.grippers.iter();
+        let poses = grippers.filter_map(|g| Some(g.path.as_ref()?.end_time()));
         let loads = sim.system.loads.iter().filter_map(|l| l.path.as_ref());
         let loads = loads.map(|p| p.end_time());
         let turns = scene
@@ -62,12 +64,36 @@ pub(crate) fn prepare(
             .chain(loads)
             .chain(moving)
             .chain(turns)
+            .chain(poses)
             .fold(0.0, Real::max);
+        cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))?;
+        settle_along_poses(sim, t)?;
         (sim.time, sim.system.time) = (t, t);
-        cuts.apply(Real::INFINITY, 0.0, |s| sim.cut(s))
+        Ok(())
     } else {
         cuts.apply(0.0, 0.0, |s| sim.cut(s))
     }
+}
+
+/// Most a gripper turns between two equilibria of a static solve, rad.
+const STATIC_TURN: Real = 0.5;
+
+/// A static solve whose grippers turn by more than [`STATIC_TURN`] on their way to time
+/// `t`: the equilibria at evenly spaced times before `t` first, each gripper turning by
+/// at most that from one to the next. The tangent pin holds a line, and one jump by 90°
+/// or more would start the control point next to the clamp on the clamp point itself or
+/// beyond it; in stages the rod follows the gripper on its side (a quasi-static path:
+/// the counters of these solves are not in the run's totals).
+fn settle_along_poses(sim: &mut Simulation, t: Real) -> Result<(), Error> {
+    let paths = sim.system.grippers.iter().filter_map(|g| g.path.as_ref());
+    let turn = paths.map(|p| p.turning(t)).fold(0.0, Real::max);
+    let stages = (turn / STATIC_TURN).ceil() as usize;
+    for k in 1..stages {
+        let time = t * k as Real / stages as Real;
+        (sim.time, sim.system.time) = (time, time);
+        sim.settle()?;
+    }
+    Ok(())
 }
 
 /// A run under way: its members, the loop's counters and what it measured.

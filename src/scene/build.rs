@@ -2,6 +2,7 @@
 //! (only those the scene needs: no gravity energy when gravity is zero) and its pins.
 
 use crate::scene::{KnotsSpec, LinearSolverSpec, Method, RestShape, Scene};
+use crate::world::gripper::{Gripper, PosePath};
 use crate::world::path::Path;
 use crate::{Error, Grab, RodSystem, Simulation};
 use nalgebra::Vector3;
@@ -184,7 +185,9 @@ impl Scene {
     /// The `[[pins]]`, in order, then the exact clamps' tangent pins (after them, so a
     /// scene pin's index is its place in the file): a clamp at an end of a rod with
     /// clamped knots holds its tangent exactly (a pin on the next control point sliding
-    /// along the tangent, driven with the end), elsewhere by the penalty [`Clamp`].
+    /// along the tangent or `direction`, driven with the end) and gets a gripper
+    /// ([`crate::world::gripper`], following its `pose`), elsewhere by the penalty
+    /// [`Clamp`] (no `pose` there).
     fn add_pins(&self, mut system: RodSystem) -> Result<RodSystem, Error> {
         let l = self.rod.rest_length;
         let mut tangents = Vec::new();
@@ -206,25 +209,65 @@ impl Scene {
                 path = Some(p);
             }
             if let (true, Some(ei)) = (spec.clamp, self.rod.bending_stiffness) {
+                let direction = match spec.direction {
+                    Some(d) => Vector3::from(d),
+                    None => system.rod.tangent(spec.at * l)?,
+                };
                 match Pin::tangent_at(&system.rod, spec.at * l) {
-                    Ok(tangent) => tangents.push((tangent, path)),
+                    Ok(tangent) => {
+                        // Re-normalising the start tangent could move it by an ulp.
+                        let tangent = match spec.direction {
+                            Some(_) => tangent.sliding(direction)?,
+                            None => tangent,
+                        };
+                        tangents.push((i, tangent, path));
+                    }
+                    Err(_) if spec.pose.is_some() => {
+                        let reason = "a gripper needs an exact clamp: an end of a rod with clamped knots (rod.knots)";
+                        return Err(Error::field(format!("pins[{i}].pose"), "given", reason));
+                    }
                     Err(_) => {
                         let stiffness = Clamp::stiffness_for(ei, l);
-                        let clamp = Clamp::here(&system.rod, spec.at * l, stiffness)?;
+                        let clamp = Clamp::new(spec.at * l, direction, stiffness)?;
                         system = system.with_energy(clamp);
                     }
                 }
             }
             system = system.with_pin(pin);
         }
-        for (tangent, path) in tangents {
+        for (i, tangent, path) in tangents {
+            let index = system.pins.len();
             if let Some(path) = path {
-                let index = system.pins.len();
                 system = system.with_driver(index, path);
             }
             system = system.with_pin(tangent);
+            system = self.with_gripper(system, i, index)?;
         }
         Ok(system)
+    }
+
+    /// `system` with a gripper on the exact clamp of `[[pins]]` entry `i` (its tangent
+    /// pin `tangent`), following the entry's `pose`.
+    fn with_gripper(
+        &self,
+        system: RodSystem,
+        i: usize,
+        tangent: usize,
+    ) -> Result<RodSystem, Error> {
+        let spec = &self.pins[i];
+        let rod = &system.rod;
+        let at = spec.at * self.rod.rest_length;
+        let next = system.pins[tangent].row(rod)?.first;
+        let end = usize::from(rod.segment_end(at) != Some(true));
+        let lever = (rod.positions[next] - rod.point(at)?).norm();
+        let Some(mut gripper) = Gripper::new(&system.pins, i, tangent, end, lever) else {
+            return Ok(system);
+        };
+        if let Some(keyframes) = &spec.pose {
+            let field = format!("pins[{i}].pose");
+            gripper = gripper.with_path(PosePath::new(keyframes, spec.interpolation, &field)?);
+        }
+        Ok(system.with_gripper(gripper))
     }
 
     /// The twisting energy of `rod.twist_stiffness` between the end clamps, with their
@@ -239,7 +282,13 @@ impl Scene {
         else {
             return Ok(None);
         };
-        let frame = Frame::along(rod.tangent(0.0)?)?;
+        // The clamps' axes: their `direction`s, or the rod's tangents as it starts.
+        let axis = |i: usize, s: Real| match self.pins[i].direction {
+            Some(d) => Ok(Vector3::from(d)),
+            None => rod.tangent(s),
+        };
+        let frame = Frame::along(axis(first, 0.0)?)?;
+        let end_axis = axis(last, rod.material().rest_length)?;
         let schedule = |i: usize| -> Result<Option<Keyframes<Real>>, Error> {
             let pin = &self.pins[i];
             let field = format!("pins[{i}].turn");
@@ -248,8 +297,8 @@ impl Scene {
                 .map(|k| crate::world::path::schedule(k, pin.interpolation, &field))
                 .transpose()
         };
-        let twisting =
-            Twisting::between_ends(gj, rod, frame)?.with_turns(schedule(first)?, schedule(last)?);
+        let twisting = Twisting::between_axes(gj, rod, frame, end_axis)?
+            .with_turns(schedule(first)?, schedule(last)?);
         Ok(Some(twisting))
     }
 

@@ -2,6 +2,7 @@
 //! and driven material points, and gravity.
 
 use crate::scene::{finite_vec, fraction, Scene};
+use crate::world::gripper::PosePath;
 use crate::world::path::{Interpolation, Path};
 use crate::Error;
 use serde::Deserialize;
@@ -33,6 +34,15 @@ pub struct PinSpec {
     /// Keyframes `[t, angle]` (s, rad) of the clamp's turn about its axis (a clamp at an
     /// end of a rod with `twist_stiffness`). Default: held still.
     pub turn: Option<Vec<[f64; 2]>>,
+    /// The tangent `[x, y, z]` a clamp holds (normalised; along increasing `s` at either
+    /// end). Default: the rod's tangent as it starts; a rod starting otherwise is bent
+    /// into it from the first step (a static solve: in its equilibrium).
+    pub direction: Option<[f64; 3]>,
+    /// Keyframes `[t, x, y, z, rx, ry, rz]` (s, m, rad) of a clamp's gripper: the
+    /// translation of the clamp point and the rotation vector of the gripper (about the
+    /// clamp point) against its start, interpolated like `path`
+    /// ([`crate::world::gripper`]). The first is `[0, 0, 0, 0, 0, 0, 0]`.
+    pub pose: Option<Vec<[f64; 7]>>,
 }
 
 /// `[world]`.
@@ -86,6 +96,7 @@ impl Scene {
                     return Err(Error::field(field, format!("{keyframes:?}"), reason));
                 }
             }
+            self.validate_clamp_pose(i, pin)?;
             if let Some(keyframes) = &pin.path {
                 let field = format!("pins[{i}].path");
                 let path = Path::new(keyframes, pin.interpolation, &field)?;
@@ -96,6 +107,46 @@ impl Scene {
             }
         }
         self.validate_twist()
+    }
+
+    /// `direction` and `pose` of pin `i`: on a clamp only; a finite, non-zero direction;
+    /// a pose at an end, with finite keyframes in time order starting at rest
+    /// ([`PosePath::new`]), not with `path` or `turn` (a gripper's translation and roll
+    /// say what they would).
+    fn validate_clamp_pose(&self, i: usize, pin: &PinSpec) -> Result<(), Error> {
+        let only_clamps = "only a clamp (clamp = true) holds a direction and a pose";
+        if let Some(direction) = pin.direction {
+            let field = format!("pins[{i}].direction");
+            if !pin.clamp {
+                return Err(Error::field(field, format!("{direction:?}"), only_clamps));
+            }
+            finite_vec(&field, direction)?;
+            if direction.iter().all(|a| *a == 0.0) {
+                let reason = "must not be zero (the tangent the clamp holds)";
+                return Err(Error::field(field, format!("{direction:?}"), reason));
+            }
+        }
+        let Some(keyframes) = &pin.pose else {
+            return Ok(());
+        };
+        let field = format!("pins[{i}].pose");
+        let value = || format!("{keyframes:?}");
+        if !pin.clamp {
+            return Err(Error::field(field, value(), only_clamps));
+        }
+        if !(pin.at == 0.0 || pin.at == 1.0) {
+            let reason = "a gripper holds a clamp at an end of a rod (at = 0 or 1)";
+            return Err(Error::field(field, value(), reason));
+        }
+        for (other, given) in [("path", pin.path.is_some()), ("turn", pin.turn.is_some())] {
+            if given {
+                let reason = format!(
+                    "given with pins[{i}].{other}: a pose moves and rolls the clamp itself (its translation and the rotation vector's part along the tangent)"
+                );
+                return Err(Error::field(field, value(), reason));
+            }
+        }
+        PosePath::new(keyframes, pin.interpolation, &field).map(|_| ())
     }
 
     /// `rod.twist_stiffness` needs bending and, on an open rod, clamps at both ends;

@@ -3,6 +3,7 @@
 
 use crate::scene::build::MIN_START_CLEARANCE;
 use crate::scene::{PinSpec, Scene};
+use crate::world::gripper::PosePath;
 use crate::world::path::Path;
 use crate::Error;
 use nalgebra::Vector3;
@@ -170,15 +171,17 @@ impl Scene {
         }
     }
 
-    /// Times to compare two pins at: 0, every keyframe of their paths and 64 instants
+    /// Times to compare two pins at: 0, every keyframe of their paths (and poses) and 64 instants
     /// along the longer path (smooth interpolation may pass between keyframes).
     fn pin_check_times(&self, a: &PinSpec, b: &PinSpec) -> Result<Vec<f64>, Error> {
         let mut times = vec![0.0];
         let mut end: f64 = 0.0;
         for pin in [a, b] {
-            if let Some(keyframes) = &pin.path {
-                times.extend(keyframes.iter().map(|k| k[0]));
-                end = end.max(keyframes.iter().map(|k| k[0]).fold(0.0, f64::max));
+            let path = pin.path.iter().flatten().map(|k| k[0]);
+            let pose = pin.pose.iter().flatten().map(|k| k[0]);
+            for time in path.chain(pose) {
+                times.push(time);
+                end = end.max(time);
             }
         }
         times.extend((1..=64).map(|k| end * k as f64 / 64.0));
@@ -188,6 +191,16 @@ impl Scene {
     /// Where pin `p` holds its point at time `t`: on its path, at its `position`, or on
     /// the straight start line; `None` where the start is no straight line.
     fn pin_point(&self, p: &PinSpec, t: f64) -> Result<Option<Vector3<f64>>, Error> {
+        let start = self.pin_start(p, t)?;
+        let Some(keyframes) = &p.pose else {
+            return Ok(start);
+        };
+        let pose = PosePath::new(keyframes, p.interpolation, "pins[].pose")?;
+        Ok(start.map(|x| x + pose.at(t).0))
+    }
+
+    /// [`Scene::pin_point`] without a gripper's translation.
+    fn pin_start(&self, p: &PinSpec, t: f64) -> Result<Option<Vector3<f64>>, Error> {
         if let Some(keyframes) = &p.path {
             let path = Path::new(keyframes, p.interpolation, "pins[].path")?;
             return Ok(Some(path.at(t)));

@@ -15,6 +15,7 @@
 //! ([`splinerod_energies::Contact::with_segment_radii`]).
 
 use crate::scene::{RodSpec, Scene};
+use crate::world::gripper::Gripper;
 use crate::{Error, PinDriver, RodSystem};
 use splinerod_core::{Cancel, Pin, Real, Rod};
 use splinerod_energies::OnSegment;
@@ -261,6 +262,7 @@ impl Scene {
         let mut scene_pins: Vec<Option<Pin>> = vec![None; self.pins.len()];
         let mut tangents = Vec::new();
         let mut drivers = Vec::new();
+        let mut grippers = Vec::new();
         let mut grabs = vec![None; self.grabs.len()];
         let mut loads = vec![None; self.loads.len()];
         for (k, (part, origins)) in parts.into_iter().enumerate() {
@@ -284,6 +286,12 @@ impl Scene {
                 pin: index[d.pin],
                 path: d.path,
             }));
+            grippers.extend(part.grippers.into_iter().map(|g| Gripper {
+                pin: index[g.pin],
+                tangent: index[g.tangent],
+                segment: Some(k),
+                ..g
+            }));
             for (mut grab, &file) in part.grabs.into_iter().zip(&origins.grabs) {
                 grab.spring.at = at(grab.spring.at);
                 grabs[file] = Some(grab);
@@ -299,6 +307,7 @@ impl Scene {
         }
         system.pins = scene_pins.into_iter().flatten().chain(tangents).collect();
         system.drivers = drivers;
+        system.grippers = grippers;
         system.grabs = grabs.into_iter().flatten().collect();
         system.loads = loads.into_iter().flatten().collect();
         if let Some(contact) = self.contact()? {

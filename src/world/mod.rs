@@ -10,6 +10,7 @@
 pub(crate) mod ensemble;
 pub mod estimate;
 pub(crate) mod grab;
+pub mod gripper;
 pub(crate) mod kept;
 pub(crate) mod lanes;
 pub mod path;

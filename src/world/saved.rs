@@ -9,7 +9,7 @@
 //! * the knot changes so far, replayed in order through [`RodSystem::change_knots`]
 //!   (every energy hears the same maps, so the rest shapes and caches that follow the
 //!   knots come out the same; the coefficients are then overwritten);
-//! * the pins' positions and the grabs' springs;
+//! * the pins' positions, the grabs' springs and the grippers' poses;
 //! * each energy's and the integrator's own state ([`splinerod_core::state`]);
 //! * the adapter's protected knots and the error estimator's schedule and last estimate.
 //!
@@ -66,6 +66,17 @@ pub struct GrabState {
     pub from: Option<[Real; 3]>,
 }
 
+/// A gripper's pose ([`crate::world::gripper::Pose`]) as plain data.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PoseState {
+    /// Translation of the clamp point, m.
+    pub translation: [Real; 3],
+    /// Rotation matrix, row by row.
+    pub rotation: [Real; 9],
+    /// Roll about the carried tangent, rad.
+    pub roll: Real,
+}
+
 /// The state of a [`Simulation`] between two steps (module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SimulationState {
@@ -92,6 +103,8 @@ pub struct SimulationState {
     pub pins: Vec<[Real; 3]>,
     /// Each grab's state.
     pub grabs: Vec<GrabState>,
+    /// Each gripper's pose (`None`: never moved); empty if no gripper moved.
+    pub grippers: Vec<Option<PoseState>>,
     /// Each energy's own state, in the system's order.
     pub energies: Vec<Numbers>,
     /// The integrator's own state.
@@ -147,6 +160,7 @@ impl Simulation {
                     from: g.from.map(Into::into),
                 })
                 .collect(),
+            grippers: gripper_states(system),
             energies: energies.collect(),
             integrator: integrator.into(),
             protected: self.adapter.as_ref().map(|a| a.protected().to_vec()),
@@ -176,6 +190,7 @@ impl Simulation {
             grab.spring.target = g.target.into();
             grab.from = g.from.map(Into::into);
         }
+        restore_grippers(system, &state.grippers)?;
         if state.energies.len() != system.energies.len() {
             return Err(mismatch("energies of another scene"));
         }
@@ -235,6 +250,54 @@ impl Simulation {
         }
         Ok(())
     }
+}
+
+/// The grippers' poses, or nothing if none moved.
+fn gripper_states(system: &crate::RodSystem) -> Vec<Option<PoseState>> {
+    if system.grippers.iter().all(|g| g.held.is_none()) {
+        return Vec::new();
+    }
+    let state = |p: &crate::world::gripper::Pose| {
+        let mut rotation = [0.0; 9];
+        for (k, r) in rotation.iter_mut().enumerate() {
+            *r = p.rotation[(k / 3, k % 3)];
+        }
+        PoseState {
+            translation: p.translation.into(),
+            rotation,
+            roll: p.roll,
+        }
+    };
+    system
+        .grippers
+        .iter()
+        .map(|g| g.held.as_ref().map(state))
+        .collect()
+}
+
+/// Puts the saved poses back on the grippers, their pins and energies (before the
+/// energies read their own state, which already counts the rolls).
+fn restore_grippers(
+    system: &mut crate::RodSystem,
+    saved: &[Option<PoseState>],
+) -> Result<(), Error> {
+    if saved.is_empty() {
+        return Ok(());
+    }
+    if saved.len() != system.grippers.len() {
+        return Err(mismatch("grippers of another scene"));
+    }
+    for (k, s) in saved.iter().enumerate() {
+        if let Some(s) = s {
+            let pose = crate::world::gripper::Pose {
+                translation: s.translation.into(),
+                rotation: nalgebra::Matrix3::from_row_slice(&s.rotation),
+                roll: s.roll,
+            };
+            system.set_gripper_pose(k, pose)?;
+        }
+    }
+    Ok(())
 }
 
 /// The change a knot map made, for the log.

@@ -305,10 +305,11 @@ impl Simulation {
                 Err(_) => Real::NAN,
             })
             .sum();
-        let driven = self.system.energies.iter().any(|e| {
-            let lifecycle = e.capabilities().lifecycle;
-            lifecycle.is_some_and(|l| l.time_dependent())
-        });
+        let driven = self.system.has_posed_grippers()
+            || self.system.energies.iter().any(|e| {
+                let lifecycle = e.capabilities().lifecycle;
+                lifecycle.is_some_and(|l| l.time_dependent())
+            });
         if self.system.grabs.is_empty() && !driven {
             return loads;
         }
@@ -324,12 +325,14 @@ impl Simulation {
         energies
             .filter_map(|e| e.lifecycle_mut())
             .for_each(|l| l.drive(start));
+        self.system.drive_grippers(start);
         let then = self.system.potential_energy();
         swap(&mut self.system.grabs, &mut self.substep.targets);
         let energies = self.system.energies.iter_mut();
         energies
             .filter_map(|e| e.lifecycle_mut())
             .for_each(|l| l.drive(end));
+        self.system.drive_grippers(end);
         now - then + loads
     }
 
@@ -337,7 +340,7 @@ impl Simulation {
     /// they exerted (the integrator's, constant over the step) times their displacement
     /// (0 if the integrator does not report pin forces).
     fn pin_work(&self) -> Real {
-        if self.system.drivers.is_empty() {
+        if self.system.drivers.is_empty() && !self.system.has_posed_grippers() {
             return 0.0; // fixed pins do no work
         }
         let forces = self.integrator.pin_forces();

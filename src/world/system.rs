@@ -12,6 +12,7 @@
 //! the next step, solve or estimate refuses to run on it
 //! ([`crate::Error::KnotsChangedUnheard`]) instead of reading stale caches.
 
+use crate::world::gripper::{Gripper, Pose};
 use crate::world::path::Path;
 use crate::{Error, Grab};
 
@@ -56,6 +57,9 @@ pub struct RodSystem {
     pub drivers: Vec<PinDriver>,
     /// Point loads (their forces follow their paths, [`RodSystem::drive`]).
     pub loads: Vec<Load>,
+    /// Grippers holding exact clamps ([`crate::world::gripper`]), moved along their pose
+    /// paths by [`RodSystem::drive`] or between steps by [`RodSystem::set_gripper_pose`].
+    pub grippers: Vec<Gripper>,
     /// The rod's topology epoch when the energies last heard of its knots.
     heard_epoch: u64,
     /// Every knot change so far, in order (checkpoints replay them).
@@ -81,6 +85,7 @@ impl RodSystem {
             time: 0.0,
             drivers: Vec::new(),
             loads: Vec::new(),
+            grippers: Vec::new(),
             non_finite: std::sync::Mutex::new(None),
             cancel: Cancel::none(),
         }
@@ -151,10 +156,51 @@ impl RodSystem {
         self
     }
 
+    /// Adds a gripper (builder style).
+    pub fn with_gripper(mut self, gripper: Gripper) -> Self {
+        self.grippers.push(gripper);
+        self
+    }
+
+    /// Whether a gripper follows a pose path.
+    pub fn has_posed_grippers(&self) -> bool {
+        self.grippers.iter().any(|g| g.path.is_some())
+    }
+
+    /// Puts gripper `k` in `pose` (its pins and the energies measured against its
+    /// clamp frame), from the next step on; a gripper with a pose path is moved by it
+    /// again at the next step. An error naming `index` if there is no gripper `k`.
+    pub fn set_gripper_pose(&mut self, k: usize, pose: Pose) -> Result<(), Error> {
+        let count = self.grippers.len();
+        let Some(gripper) = self.grippers.get_mut(k) else {
+            let reason = format!("the system has {count} gripper(s)");
+            return Err(Error::field("index", k, reason));
+        };
+        gripper.apply(pose, &mut self.pins, &mut self.energies);
+        Ok(())
+    }
+
+    /// Moves every gripper with a pose path to its pose at time `t`.
+    pub fn drive_grippers(&mut self, t: Real) {
+        let Self {
+            grippers,
+            pins,
+            energies,
+            ..
+        } = self;
+        for g in grippers.iter_mut() {
+            if let Some(pose) = g.scheduled(t) {
+                g.apply(pose, pins, energies);
+            }
+        }
+    }
+
     /// Whether anything in the system moves with time: driven pins, keyframed loads,
-    /// grabs or time-dependent energies (else [`Self::drive`] changes nothing).
+    /// grabs, posed grippers or time-dependent energies (else [`Self::drive`] changes
+    /// nothing).
     pub fn is_driven(&self) -> bool {
         !self.drivers.is_empty()
+            || self.has_posed_grippers()
             || !self.grabs.is_empty()
             || self.loads.iter().any(|l| l.path.is_some())
             || self.energies.iter().any(|e| {
@@ -163,8 +209,8 @@ impl RodSystem {
             })
     }
 
-    /// Moves every driven pin to its path's position at time `t`, and sets every
-    /// keyframed load's force.
+    /// Moves every driven pin to its path's position at time `t`, sets every keyframed
+    /// load's force, turns the time-dependent energies and moves the posed grippers.
     pub fn drive(&mut self, t: Real) {
         for d in &self.drivers {
             if let Some(pin) = self.pins.get_mut(d.pin) {
@@ -181,6 +227,7 @@ impl RodSystem {
                 l.drive(t);
             }
         }
+        self.drive_grippers(t);
     }
 
     /// The springs of the grabs active at [`time`](Self::time).
@@ -361,6 +408,7 @@ impl std::fmt::Debug for RodSystem {
             .field("grabs", &self.grabs)
             .field("drivers", &self.drivers)
             .field("loads", &self.loads)
+            .field("grippers", &self.grippers)
             .finish()
     }
 }

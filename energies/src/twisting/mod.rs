@@ -39,19 +39,19 @@
 //! rod it has not heard about, such a knot is just a knot: the curve is still whole.)
 
 mod closed;
+pub mod grip;
 pub mod holonomy;
+mod lifecycle;
 mod window;
 
-use crate::capabilities::{Capabilities, Lifecycle, Summary};
-use crate::{Energy, EnergySummary, TwistSummary};
+use crate::capabilities::{Capabilities, Lifecycle};
+use crate::Energy;
 use holonomy::{
-    curvature_binormal, curvature_binormal_jacobians, is_cut, signed_angle, transport, wrap,
-    Samples, COARSE, FINE, WEIGHTS,
+    curvature_binormal, curvature_binormal_jacobians, signed_angle, transport, wrap, Samples,
+    COARSE, FINE, WEIGHTS,
 };
 use nalgebra::{Matrix3, Vector3};
-use splinerod_core::{
-    BlockBanded, CoreError, HessianKind, Keyframes, KnotMap, Real, Rod, SavedState, StateReader,
-};
+use splinerod_core::{BlockBanded, CoreError, HessianKind, Keyframes, Real, Rod};
 use std::sync::{Mutex, MutexGuard};
 use window::Window;
 
@@ -112,6 +112,10 @@ pub struct Twisting {
     pub turn: Real,
     start: Frame,
     end: Frame,
+    /// The clamp frames before any gripper turned them ([`Twisting::grip`]).
+    base: [Frame; 2],
+    /// The grippers' rolls about the clamp axes (start, end), rad: part of `turn`.
+    rolls: [Real; 2],
     /// Holonomies of the two polygons in the untwisted state, ψ₀.
     rest: [Real; 2],
     /// The continuous values of the polygons' ψ at the last step start (the branches
@@ -136,6 +140,8 @@ impl Clone for Twisting {
             turn: self.turn,
             start: self.start,
             end: self.end,
+            base: self.base,
+            rolls: self.rolls,
             rest: self.rest,
             branch: self.branch,
             released: self.released,
@@ -153,6 +159,19 @@ impl Twisting {
     pub fn between_ends(stiffness: Real, rod: &Rod, start: Frame) -> Result<Self, CoreError> {
         check_degree(rod)?;
         let end_axis = rod.tangent(rod.material().rest_length)?;
+        Self::between_axes(stiffness, rod, start, end_axis)
+    }
+
+    /// [`Twisting::between_ends`] with the end clamp's axis `end_axis` (a clamp holding
+    /// a direction of its own; the rod's tangent there in `between_ends`): the end
+    /// director is the start's parallel-transported along the rod and on to `end_axis`.
+    pub fn between_axes(
+        stiffness: Real,
+        rod: &Rod,
+        start: Frame,
+        end_axis: Vector3<Real>,
+    ) -> Result<Self, CoreError> {
+        check_degree(rod)?;
         let mut samples = Samples::default();
         samples.prepare(rod);
         let director = transported(&samples, FINE, &start, &end_axis);
@@ -181,6 +200,8 @@ impl Twisting {
             turn,
             start,
             end,
+            base: [start, end],
+            rolls: [0.0; 2],
             rest: [0.0; 2],
             branch: [0.0; 2],
             released: false,
@@ -208,9 +229,31 @@ impl Twisting {
         self
     }
 
-    /// The clamp frames (start, end) when the turn is zero.
+    /// The clamp frames (start, end) when the turn is zero (carried by their grippers,
+    /// [`Twisting::grip`]).
     pub fn frames(&self) -> (Frame, Frame) {
         (self.start, self.end)
+    }
+
+    /// Carries clamp `end`'s frame (0: at `s = 0`, 1: at `s = L`) with its gripper's
+    /// `rotation` against its start ([`grip::carried`]: axis \(R a_0\), director the
+    /// swing \(M d_0\)) and sets its roll to `roll` (rad; the branch of
+    /// [`grip::carried`]'s φ the caller follows), which adds to the turn Φ (the start's
+    /// with a minus sign). A rotation that is not finite, or `end > 1`, changes nothing.
+    pub fn grip(&mut self, end: usize, rotation: &Matrix3<Real>, roll: Real) {
+        let Some(base) = self.base.get(end) else {
+            return;
+        };
+        let (Ok((frame, _)), true) = (grip::carried(base, rotation), roll.is_finite()) else {
+            return;
+        };
+        let sign = if end == 0 { -1.0 } else { 1.0 };
+        self.turn += sign * (roll - self.rolls[end]);
+        self.rolls[end] = roll;
+        match end {
+            0 => self.start = frame,
+            _ => self.end = frame,
+        }
     }
 
     /// Whether a cut released the twist.
@@ -406,86 +449,5 @@ impl Energy for Twisting {
 
     fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
         Some(self)
-    }
-}
-
-impl Lifecycle for Twisting {
-    fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
-        let _ = map;
-        self.released |= is_cut(rod);
-        if !self.released {
-            let branch = self.holonomies(&self.prepared(rod));
-            self.branch = branch;
-        }
-    }
-
-    fn drive(&mut self, t: Real) {
-        let [start, end] = &self.schedules;
-        if start.is_some() || end.is_some() {
-            let angle = |s: &Option<Keyframes<Real>>| s.as_ref().map_or(0.0, |k| k.at(t));
-            self.turn = angle(end) - angle(start);
-        }
-    }
-
-    fn time_dependent(&self) -> bool {
-        self.schedules.iter().any(Option::is_some)
-    }
-
-    fn save_state(&self, out: &mut SavedState) {
-        out.real(self.turn);
-        out.reals(&self.branch);
-        out.int(u64::from(self.released));
-    }
-
-    fn load_state(&mut self, _rod: &Rod, input: &mut StateReader<'_>) -> Result<(), CoreError> {
-        self.turn = input.real()?;
-        let mut branch = Vec::new();
-        input.reals_into(&mut branch)?;
-        self.branch = branch
-            .try_into()
-            .map_err(|_| CoreError::StateMismatch("a twist branch of another length"))?;
-        self.released = input.int()? == 1;
-        Ok(())
-    }
-
-    fn supports(&self, rod: &Rod) -> Result<(), CoreError> {
-        match (rod.is_closed(), self.closed) {
-            (true, false) => Err(CoreError::InvalidParameter {
-                name: "twist",
-                value: 0.0,
-                reason: "twisting between two clamps needs an open rod (closed rods have no ends)",
-            }),
-            (false, true) => Err(CoreError::InvalidParameter {
-                name: "twist",
-                value: 0.0,
-                reason: "the twist of a loop needs a closed rod",
-            }),
-            _ => Ok(()),
-        }
-    }
-
-    fn begin_step(&mut self, rod: &Rod, dt: Real) -> Result<(), CoreError> {
-        let _ = dt;
-        self.supports(rod)?;
-        if !self.released {
-            let branch = self.holonomies(&self.prepared(rod));
-            self.branch = branch;
-        }
-        Ok(())
-    }
-}
-
-impl Summary for Twisting {
-    fn summary(&self, rod: &Rod) -> Result<EnergySummary, CoreError> {
-        Ok(EnergySummary {
-            twist: Some(TwistSummary {
-                twist: self.twist(rod),
-                turn: self.turn,
-                moment: self.moment(rod),
-                axes: [self.start.axis.into(), self.end.axis.into()],
-                start_director: self.start.director.into(),
-            }),
-            ..EnergySummary::default()
-        })
     }
 }
