@@ -1,8 +1,9 @@
 //! Sensitivities of static equilibria (#48) against central finite differences of static
 //! solves (two step sizes, extrapolated): the catenary (EA, density, gravity, a point load), the cantilever
-//! (EI, EA, density) and a twisted clamped rod (GJ); bad parameter paths named.
+//! (EI, EA, density) and a twisted clamped rod (GJ), pins' positions (held, driven,
+//! clamped); bad parameter paths named.
 
-use splinerod::sensitivity::static_sensitivities;
+use splinerod::sensitivity::{set_parameter, static_sensitivities};
 use splinerod::{Real, Scene};
 
 /// A bundled scene with a tight static tolerance (the finite differences need the
@@ -161,10 +162,9 @@ fn bad_parameter_paths_are_named() {
     );
 }
 
-#[test]
-fn a_twisted_rod_s_sensitivities_match_finite_differences() {
-    // Clamped at both ends, the end turned by 3 rad, sagging sideways under gravity: the
-    // twist moment bends the sag out of its plane, so the shape depends on GJ.
+/// Clamped at both ends, the end turned by 3 rad, sagging sideways under gravity: the
+/// twist moment bends the sag out of its plane, so the shape depends on GJ.
+fn twisted() -> Scene {
     let text = "[rod]\nrest_length = 1.5\nlinear_density = 0.1\nstretch_stiffness = 1e4\n\
          bending_stiffness = 0.3\ntwist_stiffness = 0.2\ncontrol_points = 12\n\
          start = [0.0, 0.0, 0.0]\nend = [0.0, 0.0, 1.5]\n\n\
@@ -173,6 +173,12 @@ fn a_twisted_rod_s_sensitivities_match_finite_differences() {
          [world]\ngravity = [-9.81, 0.0, 0.0]\n\n[solver]\nmethod = \"static\"\n";
     let mut scene = Scene::from_toml(text).expect("scene");
     scene.solver.tolerance = Some(1e-13);
+    scene
+}
+
+#[test]
+fn a_twisted_rod_s_sensitivities_match_finite_differences() {
+    let scene = twisted();
     let error = check(
         &scene,
         &[
@@ -312,4 +318,80 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
         "--params=rod.stretch_stiffness",
     ]);
     assert!(line.contains("solver.method"), "{line}");
+}
+
+#[test]
+fn the_pins_positions_sensitivities_match_finite_differences() {
+    // The catenary's end pin moved along and across the span, and out of its plane.
+    let scene = tight("catenary_static");
+    let error = check(
+        &scene,
+        &[
+            ("pins[1].position[0]", &|s, v| {
+                set_parameter(s, "pins[1].position[0]", v).unwrap()
+            }),
+            ("pins[1].position[1]", &|s, v| {
+                set_parameter(s, "pins[1].position[1]", v).unwrap()
+            }),
+            ("pins[0].position[2]", &|s, v| {
+                set_parameter(s, "pins[0].position[2]", v).unwrap()
+            }),
+        ],
+    );
+    assert!(error < 1e-6, "catenary: relative error {error:e}");
+    // A driven pin: the static solve holds it at its path's end; the parameter offsets
+    // the whole path.
+    let mut driven = scene.clone();
+    driven.pins[1].path = Some(vec![[0.0, 0.8, 0.0, 0.0], [1.0, 0.6, 0.1, 0.05]]);
+    let error = check(
+        &driven,
+        &[("pins[1].position[0]", &|s, v| {
+            set_parameter(s, "pins[1].position[0]", v).unwrap()
+        })],
+    );
+    assert!(error < 1e-6, "driven: relative error {error:e}");
+    // Clamps: the tangent pin moves with its clamp (the twisted rod's far clamp moved
+    // sideways and along; the cantilever's clamp lifted: a rigid translation).
+    // (Moved along the axis, where the end sits at z = 1.5, a relative step 1e-3 is
+    // 1.5 mm: the scene shifted to end at z = 0 takes the differences' step 1e-6.)
+    let mut twisted = twisted();
+    twisted.rod.start = Some([0.0, 0.0, -1.5]);
+    twisted.rod.end = Some([0.0, 0.0, 0.0]);
+    let error = check(
+        &twisted,
+        &[
+            ("pins[1].position[1]", &|s, v| {
+                set_parameter(s, "pins[1].position[1]", v).unwrap()
+            }),
+            ("pins[1].position[2]", &|s, v| {
+                set_parameter(s, "pins[1].position[2]", v).unwrap()
+            }),
+        ],
+    );
+    assert!(error < 1e-6, "twisted: relative error {error:e}");
+    let lifted = static_sensitivities(&tight("cantilever"), &["pins[0].position[1]"]).unwrap();
+    for d in &lifted.positions[0] {
+        assert!((d[1] - 1.0).abs() < 1e-9 && d[0].abs() < 1e-9, "{d:?}");
+    }
+    assert!(lifted.pin_forces[0]
+        .iter()
+        .flatten()
+        .all(|f| f.abs() < 1e-8));
+}
+
+#[test]
+fn bad_pin_friction_and_rest_length_paths_are_named() {
+    let scene = tight("catenary_static");
+    for (path, words) in [
+        ("pins[7].position[0]", "2 [[pins]]"),
+        ("pins[0].position[3]", "3 components"),
+        ("pins[0].position", "not a scalar parameter"),
+        ("rod.rest_length", "rest length"),
+        ("contact.friction", "no [contact]"),
+    ] {
+        let e = static_sensitivities(&scene, &[path])
+            .expect_err(path)
+            .to_string();
+        assert!(e.contains(path) && e.contains(words), "{path}: {e}");
+    }
 }

@@ -55,6 +55,7 @@ pub mod detect;
 mod friction;
 pub mod obstacle;
 mod pair;
+mod parameters;
 mod penalty;
 mod sample_sums;
 mod skin;

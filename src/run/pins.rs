@@ -20,7 +20,7 @@ pub(crate) fn fold_pin_forces(
     sim: &Simulation,
     mut forces: Vec<nalgebra::Vector3<Real>>,
 ) -> Vec<[Real; 3]> {
-    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+    for (i, j) in clamp_tangents(scene, &sim.system.pins, forces.len()) {
         let extra = forces[i];
         forces[j] += extra;
     }
@@ -28,14 +28,13 @@ pub(crate) fn fold_pin_forces(
     forces.into_iter().map(Into::into).collect()
 }
 
-/// `(i, j)` for every exact clamp: its tangent pin `i` in the system (below `count`) and
-/// its `[[pins]]` entry `j`.
-fn clamp_tangents<'a>(
+/// `(i, j)` for every exact clamp: its tangent pin `i` among the system's `pins` (below
+/// `count`) and its `[[pins]]` entry `j`.
+pub(crate) fn clamp_tangents<'a>(
     scene: &'a Scene,
-    sim: &'a Simulation,
+    pins: &'a [splinerod_core::Pin],
     count: usize,
 ) -> impl Iterator<Item = (usize, usize)> + 'a {
-    let pins = &sim.system.pins;
     (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
         let pin = &pins[i];
         let clamp = scene.pins.iter().position(|p| {
@@ -54,7 +53,7 @@ pub(crate) fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 
     let mut torques = crate::run::twist::pin_torques(scene, &sim.system)?;
     let forces = sim.integrator.pin_forces();
     let rod = &sim.system.rod;
-    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+    for (i, j) in clamp_tangents(scene, &sim.system.pins, forces.len()) {
         let pin = &sim.system.pins[i];
         let next = pin.row(rod)?.first;
         let points = rod.segment_points(rod.segment_at(pin.at));

@@ -300,6 +300,8 @@ struct Rates {
     grab_from: Vec<Vec<Option<Vector3<Real>>>>,
     /// Per grab, whether it had not started before the step.
     waiting: Vec<bool>,
+    /// Per parameter, the derivative of each pin's target (`pins[i].position[c]`).
+    pin_rates: Vec<Vec<Vector3<Real>>>,
     scratch: Vec<Vector3<Real>>,
     /// A facade error met inside a callback.
     error: Option<Error>,
@@ -315,6 +317,10 @@ impl Rates {
         targets: Vec<Target>,
     ) -> Result<Self, Error> {
         let mut barrier = Vec::with_capacity(targets.len());
+        let mut pin_rates = vec![Vec::new(); targets.len()];
+        for (t, out) in targets.iter().zip(&mut pin_rates) {
+            super::paths::target_rates(scene, &system.pins, t, out);
+        }
         let mut probe = vec![Vector3::zeros(); system.rod.len()];
         for (path, t) in paths.iter().zip(&targets) {
             let value = target_value(scene, t);
@@ -334,6 +340,7 @@ impl Rates {
             barrier,
             inverse_density: 1.0 / system.rod.material().linear_density,
             waiting: Vec::with_capacity(system.grabs.len()),
+            pin_rates,
             scratch: Vec::with_capacity(system.rod.len()),
             error: None,
         })
@@ -372,7 +379,10 @@ impl Rates {
                     out[row.first + j][c] -= row.value[j];
                 }
             }
-            Target::Damping(_) => {}
+            Target::Friction => {
+                energy_rate(system, "friction", None, out)?;
+            }
+            Target::Damping(_) | Target::Pin { .. } => {}
         }
         if let Some(ratio) = self.barrier[k] {
             add_barrier_rate(system, ratio, out, &mut self.scratch);
@@ -426,5 +436,28 @@ impl ParameterRates for Rates {
             Target::Damping(None) => 1.0,
             _ => 0.0,
         }
+    }
+
+    fn add_start_rate(
+        &mut self,
+        system: &dyn System,
+        start_rate: &[Vector3<Real>],
+        out: &mut [Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
+        let Some(system) = system.as_any().and_then(|a| a.downcast_ref::<RodSystem>()) else {
+            return Err(IntegratorError::SolverState(
+                "forward sensitivities need the facade's system",
+            ));
+        };
+        for energy in system.acting() {
+            if let Some(lifecycle) = energy.capabilities().lifecycle {
+                lifecycle.add_start_rate(&system.rod, start_rate, out);
+            }
+        }
+        Ok(())
+    }
+
+    fn target_rate(&self, k: usize, pin: usize) -> Vector3<Real> {
+        self.pin_rates[k].get(pin).copied().unwrap_or_default()
     }
 }

@@ -114,17 +114,61 @@ impl Friction {
 
     /// Adds \\(\partial D/\partial q\\).
     pub fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        self.add_scaled_gradient(rod, 1.0, gradient);
+    }
+
+    /// Adds `scale` \\(\partial D/\partial q\\) (with `scale = 1/μ`: the derivative of
+    /// the gradient by a coefficient μ every lag's bound `μλ` is linear in, the lags held).
+    pub fn add_scaled_gradient(&self, rod: &Rod, scale: Real, gradient: &mut [Vector3<Real>]) {
         if !self.active(rod) {
             return;
         }
         let eps = self.eps;
         for lag in &self.lags {
             let u = self.slip(lag, &rod.positions);
-            let force = u * (lag.bound / u.norm().max(eps));
+            let force = u * (scale * lag.bound / u.norm().max(eps));
             for &(k, w) in &lag.weights[..lag.len] {
                 gradient[k] += force * w;
             }
         }
+    }
+
+    /// Adds the derivative of \\(\partial D/\partial q\\) by the step's start positions
+    /// applied to their derivative `start_rate` (one per control point): the slip is
+    /// \\(u = T(\sum_k w_k (q_k - q_k^{start}) - m)\\), so each lag adds
+    /// \\(-w_k H_u T \sum_j w_j \dot q_j^{start}\\) with the Hessian block `H_u` of
+    /// [`Self::add_hessian`] (the normal force, normal and ε held).
+    pub fn add_start_rate(
+        &self,
+        rod: &Rod,
+        start_rate: &[Vector3<Real>],
+        out: &mut [Vector3<Real>],
+    ) {
+        if !self.active(rod) || start_rate.len() != self.start.len() {
+            return;
+        }
+        for lag in &self.lags {
+            let weights = &lag.weights[..lag.len];
+            let moved: Vector3<Real> = weights.iter().map(|&(k, w)| start_rate[k] * w).sum();
+            let rate = self.block(lag, &rod.positions) * (lag.tangent * moved);
+            for &(k, w) in weights {
+                out[k] -= rate * w;
+            }
+        }
+    }
+
+    /// The Hessian block \\(\mu\lambda H_u\\) of `lag` at the positions `q`.
+    fn block(&self, lag: &Lag, q: &[Vector3<Real>]) -> Matrix3<Real> {
+        // The same operations as the Hessian always had (bit for bit).
+        let u = self.slip(lag, q);
+        let y = u.norm();
+        let h = if y < self.eps {
+            lag.tangent / self.eps
+        } else {
+            let along = u / y;
+            (lag.tangent - along * along.transpose()) / y
+        };
+        h * lag.bound
     }
 
     /// Adds to `forces[i]` the friction force the rod exerts on obstacle `i` at its
@@ -146,16 +190,8 @@ impl Friction {
         if !self.active(rod) {
             return;
         }
-        let eps = self.eps;
         for lag in &self.lags {
-            let u = self.slip(lag, &rod.positions);
-            let y = u.norm();
-            let h = if y < eps {
-                lag.tangent / eps
-            } else {
-                let along = u / y;
-                (lag.tangent - along * along.transpose()) / y
-            } * lag.bound;
+            let h = self.block(lag, &rod.positions);
             let weights = &lag.weights[..lag.len];
             for (a, &(i, wi)) in weights.iter().enumerate() {
                 for &(j, wj) in &weights[a..] {
