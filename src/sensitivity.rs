@@ -33,9 +33,11 @@
 
 mod dynamic;
 pub mod paths;
+mod step_view;
 
 pub use paths::{parameter_value, set_parameter};
 pub(crate) use paths::{target, target_value, Target};
+pub use step_view::StepView;
 
 pub use dynamic::{
     dynamic_sensitivities, observed_sensitivities, DynamicSensitivities, StepObserver,

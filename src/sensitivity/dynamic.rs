@@ -42,7 +42,7 @@
 //! of one of several `[[rods]]`.
 
 use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
-use super::{by_name, largest, points_at, sample_rows, shared_json};
+use super::{by_name, largest, points_at, sample_rows, shared_json, StepView};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
@@ -126,13 +126,13 @@ impl DynamicSensitivities {
 /// The run of the dynamic `scene` and its forward sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn dynamic_sensitivities(scene: &Scene, paths: &[&str]) -> Result<DynamicSensitivities, Error> {
-    observed_sensitivities(scene, paths, &mut |_, _, _| Ok(()))
+    observed_sensitivities(scene, paths, &mut |_| Ok(()))
 }
 
-/// What sees a run after each of its steps: the time, the rod, and per parameter the
-/// forward state (the derivatives of its control points and velocities). An error
-/// stops the run.
-pub type StepObserver<'a> = dyn FnMut(Real, &Rod, &[ForwardState]) -> Result<(), Error> + 'a;
+/// What sees a run after each of its steps ([`StepView`]: the time, the rod, per
+/// parameter the forward state, the pins' forces and their derivatives). An error stops
+/// the run.
+pub type StepObserver<'a> = dyn FnMut(&StepView<'_>) -> Result<(), Error> + 'a;
 
 /// [`dynamic_sensitivities`], calling `observe` after every step (a fit reads its
 /// observations there, at any material coordinate).
@@ -157,7 +157,7 @@ pub fn observed_sensitivities(
     let mut times = Vec::with_capacity(scene.step_count());
     for step in 0..scene.step_count() {
         one_step(&mut sim, dt, step, &mut rates, &mut states)?;
-        observe(sim.time, &sim.system.rod, &states)?;
+        observe(&StepView::new(scene, &sim, &states))?;
         times.push(TimeSensitivities {
             t: sim.time,
             positions: states
