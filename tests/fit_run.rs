@@ -189,7 +189,8 @@ fn the_pin_s_measured_force_separates_the_density_in_a_run() {
     let real = truth(0.1, 200.0, 5e-3);
     let cloud = noisy_run_points(&real, (10, 10), 1e-4, 5).expect("points");
     let start = truth(0.15, 250.0, 1e-2);
-    let shape = splinerod::fit::command::fit_scene(&start, &[cloud.clone()], &params).expect("fit");
+    let shape = splinerod::fit::command::fit_scene(&start, std::slice::from_ref(&cloud), &params)
+        .expect("fit");
     println!(
         "points alone: unidentifiable {:?}",
         shape.report.unidentifiable

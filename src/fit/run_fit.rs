@@ -179,7 +179,8 @@ fn step_of(scene: &Scene, t: Real) -> Result<usize, Error> {
     let steps = scene.step_count();
     let step = (t / dt).round();
     let off = (t / dt - step).abs() > STEP_TIME_TOLERANCE;
-    if !(dt > 0.0) || off || step < 1.0 || step as usize > steps {
+    let stepped = dt > 0.0;
+    if !stepped || off || step < 1.0 || step as usize > steps {
         let reason = format!(
             "a run's observations are read at the end of a step: t must be a multiple \
              of solver.dt = {dt} s in (0, {}] s",
