@@ -76,24 +76,8 @@ fn a_runs_jacobian_matches_differences_of_runs() {
     let p = [0.3, 5e-3];
     let mut fit = RunFit::new(&truth, &params, &data).expect("fit");
     let m = fit.residual_count();
-    let (mut r, mut j) = (vec![0.0; m], vec![0.0; 2 * m]);
-    fit.evaluate(&p, &mut r, Some(&mut j)).expect("evaluated");
     for k in 0..2 {
-        let h = 1e-4 * p[k];
-        let mut residuals = |v: Real| {
-            let mut q = p;
-            q[k] = v;
-            let mut out = vec![0.0; m];
-            fit.evaluate(&q, &mut out, None).expect("run");
-            out
-        };
-        let (up, down) = (residuals(p[k] + h), residuals(p[k] - h));
-        let (mut worst, mut largest) = (0.0 as Real, 0.0 as Real);
-        for i in 0..m {
-            let fd = (up[i] - down[i]) / (2.0 * h);
-            worst = worst.max((j[i * 2 + k] - fd).abs());
-            largest = largest.max(fd.abs());
-        }
+        let (worst, largest) = jacobian_error(&mut fit, &p, k, 1e-4, 0..m);
         println!("{}: worst {worst:.3e} of {largest:.3e}", params[k]);
         assert!(
             worst < 1e-4 * largest,
@@ -101,6 +85,37 @@ fn a_runs_jacobian_matches_differences_of_runs() {
             params[k]
         );
     }
+}
+
+/// The largest difference between column `k` of `fit`'s Jacobian at `p` and central
+/// differences of its residuals at the relative step `step`, over the residuals `rows`,
+/// and the largest difference quotient there.
+fn jacobian_error(
+    fit: &mut RunFit<'_>,
+    p: &[Real],
+    k: usize,
+    step: Real,
+    rows: std::ops::Range<usize>,
+) -> (Real, Real) {
+    let (m, n) = (fit.residual_count(), p.len());
+    let (mut r, mut j) = (vec![0.0; m], vec![0.0; n * m]);
+    fit.evaluate(p, &mut r, Some(&mut j)).expect("evaluated");
+    let h = step * p[k];
+    let mut residuals = |v: Real| {
+        let mut q = p.to_vec();
+        q[k] = v;
+        let mut out = vec![0.0; m];
+        fit.evaluate(&q, &mut out, None).expect("run");
+        out
+    };
+    let (up, down) = (residuals(p[k] + h), residuals(p[k] - h));
+    let (mut worst, mut largest) = (0.0 as Real, 0.0 as Real);
+    for i in rows {
+        let fd = (up[i] - down[i]) / (2.0 * h);
+        worst = worst.max((j[i * n + k] - fd).abs());
+        largest = largest.max(fd.abs());
+    }
+    (worst, largest)
 }
 
 #[test]
@@ -233,28 +248,12 @@ fn a_runs_jacobian_of_points_and_pin_forces_matches_differences_of_runs() {
     let mut fit = RunFit::observed(&truth, &params, rows).expect("fit");
     let m = fit.residual_count();
     assert_eq!(m, cloud.rows.len() + 3 * force.rows.len());
-    let (mut r, mut j) = (vec![0.0; m], vec![0.0; 2 * m]);
-    fit.evaluate(&p, &mut r, Some(&mut j)).expect("evaluated");
     // A relative step of 1e-6: a point's distance (~σ = 0.1 mm) is not smooth where it
-    // vanishes, and larger steps move the curve by a fair part of it.
+    // vanishes, and larger steps move the curve by a fair part of it. Points' rows,
+    // then the forces': each against its own largest derivative.
     for k in 0..2 {
-        let h = 1e-6 * p[k];
-        let mut residuals = |v: Real| {
-            let mut q = p;
-            q[k] = v;
-            let mut out = vec![0.0; m];
-            fit.evaluate(&q, &mut out, None).expect("run");
-            out
-        };
-        let (up, down) = (residuals(p[k] + h), residuals(p[k] - h));
-        // Points' rows, then the forces': each against its own largest derivative.
         for (part, rows) in [(0, 0..cloud.rows.len()), (1, cloud.rows.len()..m)] {
-            let (mut worst, mut largest) = (0.0 as Real, 0.0 as Real);
-            for i in rows {
-                let fd = (up[i] - down[i]) / (2.0 * h);
-                worst = worst.max((j[i * 2 + k] - fd).abs());
-                largest = largest.max(fd.abs());
-            }
+            let (worst, largest) = jacobian_error(&mut fit, &p, k, 1e-6, rows);
             let what = ["points", "pin forces"][part];
             println!("{} ({what}): worst {worst:.3e} of {largest:.3e}", params[k]);
             assert!(

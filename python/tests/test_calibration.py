@@ -177,19 +177,12 @@ def test_fit_takes_one_array_and_a_scene_object():
 
 def catenary(end_x=0.8):
     """A catenary pinned at both ends (static), its second pin driven to (end_x, 0, 0)."""
-    return {
-        "rod": {
-            "rest_length": 1.0,
-            "linear_density": 0.1,
-            "stretch_stiffness": 100.0,
-            "control_points": 16,
-            "start": [0.0, 0.0, 0.0],
-            "end": [0.8, 0.0, 0.0],
-        },
-        "pins": [{"at": 0.0}, {"at": 1.0, "path": [[0.0, 0.8, 0.0, 0.0], [1.0, end_x, 0.0, 0.0]]}],
-        "world": {"gravity": [0.0, -9.81, 0.0]},
-        "solver": {"method": "static", "tolerance": 1e-13},
-    }
+    scene = cable(ea=100.0)
+    del scene["rod"]["bending_stiffness"]
+    scene["rod"]["end"] = [0.8, 0.0, 0.0]
+    scene["pins"] = [{"at": 0.0}, {"at": 1.0, "path": [[0, 0.8, 0, 0], [1, end_x, 0, 0]]}]
+    scene["solver"]["tolerance"] = 1e-13
+    return scene
 
 
 def test_a_pins_position_sensitivities_match_moving_its_path_end():

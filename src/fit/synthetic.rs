@@ -41,9 +41,7 @@ pub fn noisy_points(
     sigma: Real,
     seed: u64,
 ) -> Result<ObservationFile, Error> {
-    let length = truth.rod_spec(0).rest_length;
-    let along = Uniform::new_inclusive(0.0, length)
-        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))?;
+    let along = along_first_rod(truth)?;
     let at = |_: usize, rng: &mut ChaCha8Rng| along.sample(rng);
     let rows = noisy_rows(truth, count, (sigma, seed), at, false)?;
     let path = format!("synthetic points (σ = {sigma} m, seed {seed})");
@@ -138,8 +136,7 @@ pub fn noisy_run_points(
     seed: u64,
 ) -> Result<ObservationFile, Error> {
     let length = truth.rod_spec(0).rest_length;
-    let along = Uniform::new_inclusive(0.0, length)
-        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))?;
+    let along = along_first_rod(truth)?;
     let rows = observe_run(truth, every, (sigma, seed), |view, noise, rng, out| {
         for _ in 0..count {
             let s = along.sample(rng);
@@ -221,4 +218,11 @@ fn observe_run(
         Ok(())
     })?;
     Ok(rows)
+}
+
+/// The uniform distribution of material coordinates over `truth`'s first rod, m.
+fn along_first_rod(truth: &Scene) -> Result<Uniform<Real>, Error> {
+    let length = truth.rod_spec(0).rest_length;
+    Uniform::new_inclusive(0.0, length)
+        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))
 }
