@@ -310,6 +310,12 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
         "--params=rod.colour",
     ]);
     assert!(line.contains("rod.colour"), "{line}");
+    // A pin the scene lacks, a component a position lacks: exit 2, named.
+    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rod.rest_length"] {
+        let params = format!("--params={bad}");
+        let line = refused(&["sensitivities", "scenes/catenary_static.toml", &params]);
+        assert!(line.contains(bad), "{line}");
+    }
     // A run with a scheme without forward sensitivities (runs of implicit Euler and
     // BDF2 have theirs: sensitivities_dynamic.rs).
     let line = refused(&[
