@@ -311,7 +311,11 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
     ]);
     assert!(line.contains("rod.colour"), "{line}");
     // A pin the scene lacks, a component a position lacks: exit 2, named.
-    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rod.rest_length"] {
+    for bad in [
+        "pins[7].position[0]",
+        "pins[0].position[3]",
+        "rod.rest_length",
+    ] {
         let params = format!("--params={bad}");
         let line = refused(&["sensitivities", "scenes/catenary_static.toml", &params]);
         assert!(line.contains(bad), "{line}");
