@@ -8,9 +8,11 @@
 //! replaced by \\(\partial r/\partial p\\), the pins' gaps by \\(\dot c\\) and the iterate by
 //! zero, so one factorisation (by the solver the Newton iterations use: banded, sparse
 //! or periodic; the pins' Schur complement; the remainder's correction by conjugate
-//! gradients to relative 1e-9) serves every parameter.
+//! gradients to relative 1e-13, [`TANGENT_TOLERANCE`], tighter than a Newton step's
+//! 1e-9) serves every parameter.
 
 use super::{factor_matrix, solve_factored, NewtonProblem, NewtonWorkspace};
+use crate::remainder::TANGENT_TOLERANCE;
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::Real;
@@ -54,7 +56,9 @@ pub fn tangents(
         });
     }
     let zeros = std::mem::take(&mut ws.origin);
+    ws.remainder.set_relative_tolerance(Some(TANGENT_TOLERANCE));
     let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
+    ws.remainder.set_relative_tolerance(None);
     ws.origin = zeros;
     ws.carried.active = false;
     solved.map(|()| stats)
