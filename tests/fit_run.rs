@@ -171,15 +171,7 @@ fn damping_and_bending_stiffness_are_recovered_from_unlabelled_points_of_a_run()
         let start = swinging(method, 0.6, 1e-2);
         let fitted = splinerod::fit::command::fit_scene(&start, &[cloud], &params).expect("fit");
         let report = &fitted.report;
-        println!(
-            "{method}, points: damping {:.6} ± {:.1e}, EI {:.6e} ± {:.1e}, rms {:.3}, {} runs",
-            report.parameters[0],
-            report.std[0],
-            report.parameters[1],
-            report.std[1],
-            report.residual_rms,
-            report.simulations
-        );
+        println!("{method}, points: {}", described(report, &params));
         assert!(report.converged);
         common::recovered(report, &params, &[0.3, 5e-3]);
     }
@@ -216,18 +208,7 @@ fn the_pin_s_measured_force_separates_the_density_in_a_run() {
     let force = noisy_run_pin_forces(&real, 0, 10, 1e-3, 6).expect("forces");
     let fitted = splinerod::fit::command::fit_scene(&start, &[cloud, force], &params).expect("fit");
     let report = &fitted.report;
-    println!(
-        "points and pin force: μ {:.6} ± {:.1e}, EA {:.4} ± {:.1e}, EI {:.6e} ± {:.1e}, \
-         rms {:.3}, {} runs",
-        report.parameters[0],
-        report.std[0],
-        report.parameters[1],
-        report.std[1],
-        report.parameters[2],
-        report.std[2],
-        report.residual_rms,
-        report.simulations
-    );
+    println!("points and pin force: {}", described(report, &params));
     assert!(report.converged && report.unidentifiable.is_empty());
     common::recovered(report, &params, &[0.1, 200.0, 5e-3]);
 }
@@ -268,4 +249,19 @@ fn a_runs_jacobian_of_points_and_pin_forces_matches_differences_of_runs() {
         .err()
         .expect("refused");
     assert!(e.to_string().contains("observations.pin"), "{e}");
+}
+
+/// A fit's parameters with their standard deviations, residual and runs, on one line.
+fn described(report: &splinerod::fit::FitReport, params: &[&str]) -> String {
+    let values = params.iter().enumerate().map(|(k, name)| {
+        let (p, s) = (report.parameters[k], report.std[k]);
+        format!("{name} {p:.6e} ± {s:.1e}")
+    });
+    let values: Vec<String> = values.collect();
+    format!(
+        "{}, rms {:.3}, {} runs",
+        values.join(", "),
+        report.residual_rms,
+        report.simulations
+    )
 }
