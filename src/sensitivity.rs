@@ -24,7 +24,7 @@
 //! vector without its index, a parameter no energy of the scene depends on — is an
 //! error naming the path. `rod.damping` and `contact.friction` are parameters of runs
 //! (friction acts only through the lags a time step freezes: an equilibrium does not
-//! depend on it); `rod.rest_length` is refused ([`paths::REST_LENGTH`]).
+//! depend on it); `rod.rest_length` is refused (`paths::REST_LENGTH`).
 //!
 //! Outputs: the samples' positions (at fixed fractions of the rest length) and every
 //! `[[pins]]` entry's force (the derivative of the multipliers, from the same solve).

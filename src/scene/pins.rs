@@ -23,7 +23,7 @@ pub struct PinSpec {
     /// [`crate::sensitivity::set_parameter`] for `pins[i].position[c]` (finite
     /// differences, fits). The rod still starts where its shape puts it; the moved
     /// target holds from the first step on (a static solve: at equilibrium), see
-    /// [`Scene::offset_pins`].
+    /// `Scene::offset_pins`.
     #[serde(skip)]
     pub offset: [f64; 3],
     /// Also hold the tangent direction there (a clamp; needs `rod.bending_stiffness`).

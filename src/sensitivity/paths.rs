@@ -1,5 +1,5 @@
 //! Parameter paths: what a scene path such as `rods[1].bending_stiffness` or
-//! `pins[0].position[2]` names ([`Target`]), its value in a scene and how to set it.
+//! `pins[0].position[2]` names (`Target`), its value in a scene and how to set it.
 //!
 //! The paths with sensitivities: `rod.{stretch,bending,twist}_stiffness`,
 //! `rod.linear_density`, `rod.damping` (runs), the same on `rods[k].…`,
@@ -8,7 +8,7 @@
 //! the point starts, plus the [`offset`](crate::scene::PinSpec::offset) the parameter
 //! sets); setting it translates the target — of a driven pin its whole `path`, of an
 //! exact clamp its tangent pin too. Refused with the reason: `rod.rest_length` (not
-//! built, see [`REST_LENGTH`]), per-surface friction (`rod.friction`,
+//! built, see `REST_LENGTH`), per-surface friction (`rod.friction`,
 //! `obstacles[i].friction`, and `contact.friction` while one is set).
 
 use crate::{Error, Scene};

@@ -139,8 +139,8 @@ impl Lifecycle for Contact {
         self.move_obstacles(t);
     }
 
-    /// The friction lags' anchors ([`super::friction`]): the slip is measured from the
-    /// step's start.
+    /// The friction lags' anchors and normal forces (the `friction` module): the slip
+    /// is measured from the step's start.
     fn add_start_rate(&self, rod: &Rod, start_rate: &[Vector3<Real>], out: &mut [Vector3<Real>]) {
         self.friction_state().add_start_rate(rod, start_rate, out);
     }
