@@ -1,30 +1,43 @@
 //! Exact sensitivities of a static scene's equilibrium to its scalar parameters (issue
 //! #48, item 1, the static part): for the equilibrium `q(p)` of
-//! \\(\nabla E(q; p) + G^T \mu = 0\\), `G q = c`, the implicit-function theorem gives
+//! \\(\nabla E(q; p) + G^T \mu = 0\\), `G q = c(p)`, the implicit-function theorem gives
 //!
-//! \\[ K\, \frac{\mathrm{d}q}{\mathrm{d}p} = -\frac{\partial \nabla E}{\partial p}, \qquad
-//! G\, \frac{\mathrm{d}q}{\mathrm{d}p} = 0, \\]
+//! \\[ K\, \frac{\mathrm{d}q}{\mathrm{d}p} - G^T\frac{\mathrm{d}\mu}{\mathrm{d}p}
+//! = -\frac{\partial \nabla E}{\partial p}, \qquad
+//! G\, \frac{\mathrm{d}q}{\mathrm{d}p} = \frac{\mathrm{d}c}{\mathrm{d}p}, \\]
 //!
 //! one solve with the factorised exact Hessian `K` per parameter
 //! ([`splinerod_integrators::StaticSolver::sensitivities`]). Each energy gives
 //! \\(\partial \nabla E / \partial p\\) through its
 //! [`Parameters`](splinerod_energies::Parameters) capability; a point
-//! load's is \\(-b_i(s)\, e_c\\). The derivative of a material point is then
+//! load's is \\(-b_i(s)\, e_c\\). The pins' targets move only with a pin's position:
+//! for `pins[i].position[c]`, \\(\mathrm{d}c/\mathrm{d}p = e_c\\) on the entry's pin
+//! (and on an exact clamp's tangent pin, whose line is translated with it; of a driven
+//! pin the whole path is), zero on the others, and \\(\partial\nabla E/\partial p = 0\\).
+//! The derivative of a material point is then
 //! \\(\sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p\\).
 //!
-//! **Parameters**, named by their scene path: `rod.stretch_stiffness`,
+//! **Parameters**, named by their scene path ([`paths`]): `rod.stretch_stiffness`,
 //! `rod.bending_stiffness`, `rod.twist_stiffness`, `rod.linear_density` (through the
-//! weight), the same on `rods[k].…` of a `[[rods]]` scene, `world.gravity[c]` and
-//! `loads[i].force[c]`. Anything else — an unknown path, a vector without its index, a
-//! parameter no energy of the scene depends on — is an error naming the path.
+//! weight), the same on `rods[k].…` of a `[[rods]]` scene, `world.gravity[c]`,
+//! `loads[i].force[c]` and `pins[i].position[c]`. Anything else — an unknown path, a
+//! vector without its index, a parameter no energy of the scene depends on — is an
+//! error naming the path. `rod.damping` and `contact.friction` are parameters of runs
+//! (friction acts only through the lags a time step freezes: an equilibrium does not
+//! depend on it); `rod.rest_length` is refused (`paths::REST_LENGTH`).
 //!
-//! Outputs: the samples' positions and every `[[pins]]` entry's force (the derivative of
-//! the multipliers, from the same solve). Runs (implicit Euler, BDF2) have theirs from
-//! [`dynamic_sensitivities`] (forward sensitivities through every step, see
-//! `sensitivity/dynamic.rs`), which also take `rod.damping`. Not yet: pin positions as
-//! parameters.
+//! Outputs: the samples' positions (at fixed fractions of the rest length) and every
+//! `[[pins]]` entry's force (the derivative of the multipliers, from the same solve).
+//! Runs (implicit Euler, BDF2) have theirs from [`dynamic_sensitivities`] (forward
+//! sensitivities through every step, see `sensitivity/dynamic.rs`).
 
 mod dynamic;
+pub mod paths;
+mod step_view;
+
+pub use paths::{parameter_value, set_parameter};
+pub(crate) use paths::{target, target_value, Target};
+pub use step_view::StepView;
 
 pub use dynamic::{
     dynamic_sensitivities, observed_sensitivities, DynamicSensitivities, StepObserver,
@@ -149,18 +162,6 @@ pub(crate) fn largest(d: &[[Real; 3]]) -> Real {
     d.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()))
 }
 
-/// What a parameter path names.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Target {
-    /// An energy parameter: its name and the segment (`None`: any energy of the rod).
-    Energy(&'static str, Option<usize>),
-    /// Component `c` of load `i`'s force.
-    Load(usize, usize),
-    /// The mass-proportional damping rate of the rod (`None`) or of `[[rods]]` entry `k`:
-    /// a parameter of dynamic runs only.
-    Damping(Option<usize>),
-}
-
 /// The equilibrium of the static `scene` and its sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensitivities, Error> {
@@ -191,13 +192,17 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
         parameters.push((path.to_string(), value));
         rhs.push(b);
     }
-    let pins = system.pins.len();
     let mut cases: Vec<Tangent> = rhs
         .into_iter()
-        .map(|b| Tangent {
-            residual_rate: b,
-            target_rates: vec![Vector3::zeros(); pins],
-            ..Tangent::default()
+        .zip(&targets)
+        .map(|(b, target)| {
+            let mut target_rates = Vec::new();
+            paths::target_rates(scene, &system.pins, target, &mut target_rates);
+            Tangent {
+                residual_rate: b,
+                target_rates,
+                ..Tangent::default()
+            }
         })
         .collect();
     let mut solver = StaticSolver::new(scene.static_params())?;
@@ -222,88 +227,6 @@ pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensi
     })
 }
 
-/// Sets the parameter at scene path `path` (as [`static_sensitivities`] reads it) of
-/// `scene` to `value`.
-pub fn set_parameter(scene: &mut Scene, path: &str, value: Real) -> Result<(), Error> {
-    let target = target(scene, path)?;
-    set(scene, &target, value);
-    Ok(())
-}
-
-/// What the parameter `path` names in `scene`, or an error naming it.
-fn target(scene: &Scene, path: &str) -> Result<Target, Error> {
-    let bad = |reason: String| Error::field("params", format!("\"{path}\""), reason);
-    let rod_fields = [
-        "stretch_stiffness",
-        "bending_stiffness",
-        "twist_stiffness",
-        "linear_density",
-    ];
-    let energy = |field: &str, segment: Option<usize>| {
-        if field == "damping" {
-            return Ok(Target::Damping(segment));
-        }
-        let name = rod_fields.iter().find(|f| **f == field);
-        name.map(|n| Target::Energy(n, segment)).ok_or_else(|| {
-            bad(format!(
-                "not a rod parameter with sensitivities ({}, damping)",
-                rod_fields.join(", ")
-            ))
-        })
-    };
-    if let Some(field) = path.strip_prefix("rod.") {
-        if !scene.rods.is_empty() {
-            return Err(bad("the scene has [[rods]]: name the rod as rods[k]".into()));
-        }
-        return energy(field, None);
-    }
-    if let Some((k, field)) =
-        indexed(path, "rods[").and_then(|(k, rest)| Some((k, rest.strip_prefix('.')?)))
-    {
-        if k >= scene.rods.len() {
-            return Err(bad(format!(
-                "the scene has {} [[rods]] entries",
-                scene.rods.len()
-            )));
-        }
-        return energy(field, Some(k));
-    }
-    if let Some((c, "")) = indexed(path, "world.gravity[") {
-        return match c {
-            0 => Ok(Target::Energy("gravity[0]", None)),
-            1 => Ok(Target::Energy("gravity[1]", None)),
-            2 => Ok(Target::Energy("gravity[2]", None)),
-            _ => Err(bad("gravity has the components 0, 1, 2".into())),
-        };
-    }
-    if let Some((i, rest)) = indexed(path, "loads[") {
-        if let Some((c, "")) = indexed(rest, ".force[") {
-            if scene.loads.get(i).is_some_and(|l| l.force.is_none()) {
-                return Err(bad("a keyframed load (path) has no one force value".into()));
-            }
-            if i < scene.loads.len() && c < 3 {
-                return Ok(Target::Load(i, c));
-            }
-            return Err(bad(format!(
-                "the scene has {} [[loads]]; a force has 3 components",
-                scene.loads.len()
-            )));
-        }
-    }
-    Err(bad(
-        "not a scalar parameter with sensitivities (rod.<stiffness or linear_density>, \
-         rods[k].…, world.gravity[c], loads[i].force[c])"
-            .into(),
-    ))
-}
-
-/// `(n, rest)` for `path = prefix + "n]" + rest`.
-fn indexed<'a>(path: &'a str, prefix: &str) -> Option<(usize, &'a str)> {
-    let rest = path.strip_prefix(prefix)?;
-    let (n, rest) = rest.split_once(']')?;
-    Some((n.parse().ok()?, rest))
-}
-
 /// The parameter's value and \\(\partial \nabla E / \partial p\\) on `system`.
 fn derivative(
     system: &RodSystem,
@@ -318,6 +241,12 @@ fn derivative(
             let reason = "damping does not change an equilibrium (a parameter of runs)";
             Err(Error::field("params", format!("\"{path}\""), reason))
         }
+        Target::Friction => {
+            let reason = "friction acts only in runs (through the normal forces each time \
+                          step freezes): an equilibrium does not depend on it";
+            Err(Error::field("params", format!("\"{path}\""), reason))
+        }
+        Target::Pin { .. } => Ok((target_value(scene, target), b)),
         Target::Load(i, c) => {
             let load = &system.loads[i].force;
             let row = rod.basis_at(load.at)?;
@@ -332,7 +261,7 @@ fn derivative(
                     "no energy of the scene depends on it (is it set, and is it not a constraint?)";
                 return Err(Error::field("params", format!("\"{path}\""), reason));
             }
-            Ok((value(scene, name, segment), b))
+            Ok((paths::value(scene, name, segment), b))
         }
     }
 }
@@ -393,7 +322,7 @@ fn barrier_rate(
     }
     let kappa = |p: Real| -> Result<Real, Error> {
         let mut s = scene.clone();
-        set(&mut s, target, p);
+        paths::set(&mut s, target, p);
         Ok(s.contact()?.map_or(0.0, |c| c.params().stiffness))
     };
     let h = 1e-6 * value.abs().max(1e-6);
@@ -420,63 +349,6 @@ fn add_barrier_rate(
             *b += g * ratio;
         }
     }
-}
-
-/// Sets the parameter `target` of `scene` to `v`.
-fn set(scene: &mut Scene, target: &Target, v: Real) {
-    match *target {
-        Target::Damping(Some(k)) => scene.rods[k].damping = v,
-        Target::Damping(None) => scene.rod.damping = v,
-        Target::Load(i, c) => {
-            if let Some(f) = scene.loads[i].force.as_mut() {
-                f[c] = v;
-            }
-        }
-        Target::Energy(name, segment) => {
-            let rod = match segment {
-                Some(k) => &mut scene.rods[k],
-                None => &mut scene.rod,
-            };
-            match name {
-                "stretch_stiffness" => rod.stretch_stiffness = v,
-                "bending_stiffness" => rod.bending_stiffness = Some(v),
-                "twist_stiffness" => rod.twist_stiffness = Some(v),
-                "linear_density" => rod.linear_density = v,
-                "gravity[0]" => scene.world.gravity[0] = v,
-                "gravity[1]" => scene.world.gravity[1] = v,
-                _ => scene.world.gravity[2] = v,
-            }
-        }
-    }
-}
-
-/// The scene value of the parameter `target`.
-fn target_value(scene: &Scene, target: &Target) -> Real {
-    match *target {
-        Target::Energy(name, segment) => value(scene, name, segment),
-        Target::Load(i, c) => scene.loads[i].force.map_or(0.0, |f| f[c]),
-        Target::Damping(segment) => scene.rod_spec(segment.unwrap_or(0)).damping,
-    }
-}
-
-/// The scene value of the energy parameter `name` (on rod `segment`).
-fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
-    let rod = scene.rod_spec(segment.unwrap_or(0));
-    match name {
-        "stretch_stiffness" => rod.stretch_stiffness,
-        "bending_stiffness" => rod.bending_stiffness.unwrap_or(0.0),
-        "twist_stiffness" => rod.twist_stiffness.unwrap_or(0.0),
-        "linear_density" => rod.linear_density,
-        "gravity[0]" => scene.world.gravity[0],
-        "gravity[1]" => scene.world.gravity[1],
-        _ => scene.world.gravity[2],
-    }
-}
-
-/// The value of the parameter at scene path `path` (as [`set_parameter`] names it) in
-/// `scene`.
-pub fn parameter_value(scene: &Scene, path: &str) -> Result<Real, Error> {
-    Ok(target_value(scene, &target(scene, path)?))
 }
 
 /// `splinerod sensitivities`: a static scene's equilibrium's, or a run's (implicit

@@ -9,12 +9,11 @@
 //! sensitivities (`Simulation.sensitivity_history`), the last of them at the end.
 
 use crate::sensitivity::{
-    observed_sensitivities, points_at, static_sensitivities, StaticSensitivities,
+    observed_sensitivities, points_at, static_sensitivities, StaticSensitivities, StepView,
 };
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
-use splinerod_integrators::ForwardState;
 
 /// The sensitivities of a static scene's equilibrium at chosen material coordinates.
 #[derive(Debug, Clone, PartialEq)]
@@ -102,7 +101,8 @@ pub fn run_sensitivities_at(
     check_coordinates(s, rod)?;
     let (mut times, mut positions, mut at) = (Vec::new(), Vec::new(), Vec::new());
     let mut rows = Vec::new();
-    let mut observe = |t: Real, rod: &splinerod_core::Rod, states: &[ForwardState]| {
+    let mut observe = |view: &StepView<'_>| {
+        let (t, rod, states) = (view.t, view.rod, view.states);
         if rows.is_empty() {
             // The basis is fixed through a differentiated run: the rows once.
             rows = s

@@ -1,8 +1,9 @@
 //! Sensitivities of static equilibria (#48) against central finite differences of static
 //! solves (two step sizes, extrapolated): the catenary (EA, density, gravity, a point load), the cantilever
-//! (EI, EA, density) and a twisted clamped rod (GJ); bad parameter paths named.
+//! (EI, EA, density) and a twisted clamped rod (GJ), pins' positions (held, driven,
+//! clamped); bad parameter paths named.
 
-use splinerod::sensitivity::static_sensitivities;
+use splinerod::sensitivity::{set_parameter, static_sensitivities};
 use splinerod::{Real, Scene};
 
 /// A bundled scene with a tight static tolerance (the finite differences need the
@@ -14,12 +15,12 @@ fn tight(name: &str) -> Scene {
     scene
 }
 
-/// The equilibrium's samples of `scene`.
+/// The equilibrium's samples of `scene`, then its pin forces.
 fn samples(scene: &Scene) -> Vec<[Real; 3]> {
-    splinerod::run(scene)
-        .expect("static solve")
-        .samples
-        .positions
+    let result = splinerod::run(scene).expect("static solve");
+    let mut out = result.samples.positions;
+    out.extend(result.pin_forces);
+    out
 }
 
 /// Sets a parameter of a scene to a value.
@@ -60,8 +61,13 @@ fn check(scene: &Scene, cases: &[(&str, Setter<'_>)]) -> Real {
         };
         let h = 1e-3 * value.abs().max(1e-3);
         let (coarse, fine) = (central(h), central(h / 2.0));
-        // Samples, then pin forces: each judged against its own largest derivative.
+        // Samples, then pin forces: each judged against its own largest derivative —
+        // or, where the pin forces' vanishes (a cantilever's reaction is its weight
+        // whatever EI or EA), against 1e-3 of the forces per unit of the parameter
+        // (|F|/|p|: the derivative of a force proportional to the parameter).
         let samples = exact.positions[k].len();
+        let forces = base[samples..].iter().flatten();
+        let per_unit = forces.fold(0.0, |m: Real, x| m.max(x.abs())) / value.abs().max(1e-3);
         let derivatives = [&exact.positions[k][..], &exact.pin_forces[k][..]];
         let mut error: Real = 0.0;
         let mut scale = 0.0;
@@ -76,6 +82,11 @@ fn check(scene: &Scene, cases: &[(&str, Setter<'_>)]) -> Real {
                 .flatten()
                 .fold(0.0, |m: Real, x| m.max(x.abs()));
             scale = if part == 0 { largest } else { scale };
+            let largest = if part == 0 {
+                largest
+            } else {
+                largest.max(1e-3 * per_unit)
+            };
             for ((d, c), f) in exact.iter().zip(&coarse[range.clone()]).zip(&fine[range]) {
                 for i in 0..3 {
                     let extrapolated = (4.0 * f[i] - c[i]) / 3.0;
@@ -83,7 +94,10 @@ fn check(scene: &Scene, cases: &[(&str, Setter<'_>)]) -> Real {
                 }
             }
         }
-        println!("{path} = {value}: |dx/dp| up to {scale:.3e}, relative error {error:.2e}");
+        println!(
+            "{path} = {value}: |dx/dp| up to {scale:.3e}, relative error {error:.2e} \
+             (samples and pin forces)"
+        );
         worst = worst.max(error);
     }
     worst
@@ -161,10 +175,9 @@ fn bad_parameter_paths_are_named() {
     );
 }
 
-#[test]
-fn a_twisted_rod_s_sensitivities_match_finite_differences() {
-    // Clamped at both ends, the end turned by 3 rad, sagging sideways under gravity: the
-    // twist moment bends the sag out of its plane, so the shape depends on GJ.
+/// Clamped at both ends, the end turned by 3 rad, sagging sideways under gravity: the
+/// twist moment bends the sag out of its plane, so the shape depends on GJ.
+fn twisted() -> Scene {
     let text = "[rod]\nrest_length = 1.5\nlinear_density = 0.1\nstretch_stiffness = 1e4\n\
          bending_stiffness = 0.3\ntwist_stiffness = 0.2\ncontrol_points = 12\n\
          start = [0.0, 0.0, 0.0]\nend = [0.0, 0.0, 1.5]\n\n\
@@ -173,6 +186,12 @@ fn a_twisted_rod_s_sensitivities_match_finite_differences() {
          [world]\ngravity = [-9.81, 0.0, 0.0]\n\n[solver]\nmethod = \"static\"\n";
     let mut scene = Scene::from_toml(text).expect("scene");
     scene.solver.tolerance = Some(1e-13);
+    scene
+}
+
+#[test]
+fn a_twisted_rod_s_sensitivities_match_finite_differences() {
+    let scene = twisted();
     let error = check(
         &scene,
         &[
@@ -304,6 +323,16 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
         "--params=rod.colour",
     ]);
     assert!(line.contains("rod.colour"), "{line}");
+    // A pin the scene lacks, a component a position lacks: exit 2, named.
+    for bad in [
+        "pins[7].position[0]",
+        "pins[0].position[3]",
+        "rod.rest_length",
+    ] {
+        let params = format!("--params={bad}");
+        let line = refused(&["sensitivities", "scenes/catenary_static.toml", &params]);
+        assert!(line.contains(bad), "{line}");
+    }
     // A run with a scheme without forward sensitivities (runs of implicit Euler and
     // BDF2 have theirs: sensitivities_dynamic.rs).
     let line = refused(&[
@@ -312,4 +341,83 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
         "--params=rod.stretch_stiffness",
     ]);
     assert!(line.contains("solver.method"), "{line}");
+}
+
+#[test]
+fn the_pins_positions_sensitivities_match_finite_differences() {
+    // The catenary's end pin moved along and across the span, and out of its plane (the
+    // span shifted to end at x = 0: the differences' step is then 1e-6 m, not 0.8 mm).
+    let mut scene = tight("catenary_static");
+    scene.rod.start = Some([-0.8, 0.0, 0.0]);
+    scene.rod.end = Some([0.0, 0.0, 0.0]);
+    let error = check(
+        &scene,
+        &[
+            ("pins[1].position[0]", &|s, v| {
+                set_parameter(s, "pins[1].position[0]", v).unwrap()
+            }),
+            ("pins[1].position[1]", &|s, v| {
+                set_parameter(s, "pins[1].position[1]", v).unwrap()
+            }),
+            ("pins[0].position[2]", &|s, v| {
+                set_parameter(s, "pins[0].position[2]", v).unwrap()
+            }),
+        ],
+    );
+    assert!(error < 1e-6, "catenary: relative error {error:e}");
+    // A driven pin: the static solve holds it at its path's end; the parameter offsets
+    // the whole path.
+    let mut driven = scene.clone();
+    driven.pins[1].path = Some(vec![[0.0, 0.0, 0.0, 0.0], [1.0, -0.2, 0.1, 0.05]]);
+    let error = check(
+        &driven,
+        &[("pins[1].position[0]", &|s, v| {
+            set_parameter(s, "pins[1].position[0]", v).unwrap()
+        })],
+    );
+    assert!(error < 1e-6, "driven: relative error {error:e}");
+    // Clamps: the tangent pin moves with its clamp (the twisted rod's far clamp moved
+    // sideways and along; the cantilever's clamp lifted: a rigid translation).
+    // (Moved along the axis, where the end sits at z = 1.5, a relative step 1e-3 is
+    // 1.5 mm: the scene shifted to end at z = 0 takes the differences' step 1e-6.)
+    let mut twisted = twisted();
+    twisted.rod.start = Some([0.0, 0.0, -1.5]);
+    twisted.rod.end = Some([0.0, 0.0, 0.0]);
+    let error = check(
+        &twisted,
+        &[
+            ("pins[1].position[1]", &|s, v| {
+                set_parameter(s, "pins[1].position[1]", v).unwrap()
+            }),
+            ("pins[1].position[2]", &|s, v| {
+                set_parameter(s, "pins[1].position[2]", v).unwrap()
+            }),
+        ],
+    );
+    assert!(error < 1e-6, "twisted: relative error {error:e}");
+    let lifted = static_sensitivities(&tight("cantilever"), &["pins[0].position[1]"]).unwrap();
+    for d in &lifted.positions[0] {
+        assert!((d[1] - 1.0).abs() < 1e-9 && d[0].abs() < 1e-9, "{d:?}");
+    }
+    assert!(lifted.pin_forces[0]
+        .iter()
+        .flatten()
+        .all(|f| f.abs() < 1e-8));
+}
+
+#[test]
+fn bad_pin_friction_and_rest_length_paths_are_named() {
+    let scene = tight("catenary_static");
+    for (path, words) in [
+        ("pins[7].position[0]", "2 [[pins]]"),
+        ("pins[0].position[3]", "3 components"),
+        ("pins[0].position", "not a scalar parameter"),
+        ("rod.rest_length", "rest length"),
+        ("contact.friction", "no [contact]"),
+    ] {
+        let e = static_sensitivities(&scene, &[path])
+            .expect_err(path)
+            .to_string();
+        assert!(e.contains(path) && e.contains(words), "{path}: {e}");
+    }
 }

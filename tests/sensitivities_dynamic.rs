@@ -48,8 +48,22 @@ fn perturbed(scene: &Scene, path: &str, value: Real) -> Vec<[Real; 3]> {
     samples(&s)
 }
 
+thread_local! {
+    /// The differences' relative step: 1e-3, but where a test says otherwise
+    /// ([`check_with_step`]).
+    static RELATIVE_STEP: std::cell::Cell<Real> = const { std::cell::Cell::new(1e-3) };
+}
+
+/// [`check`] with the differences' relative step `step`.
+fn check_with_step(scene: &Scene, paths: &[&str], step: Real) -> Real {
+    RELATIVE_STEP.with(|r| r.set(step));
+    let worst = check(scene, paths);
+    RELATIVE_STEP.with(|r| r.set(1e-3));
+    worst
+}
+
 /// The largest relative error of `exact` (per sample) against the central differences
-/// of runs at h and h/2 (relative 1e-3), extrapolated; with `forces`, of the pin forces'
+/// of runs at h and h/2 (relative 1e-3 unless [`check_with_step`]), extrapolated; with `forces`, of the pin forces'
 /// derivatives too (each part against its own largest derivative).
 fn error_against_runs(
     scene: &Scene,
@@ -67,7 +81,7 @@ fn error_against_runs(
             .map(|(a, b)| std::array::from_fn(|c| (a[c] - b[c]) / (2.0 * h)))
             .collect()
     };
-    let h = 1e-3 * value.abs().max(1e-3);
+    let h = RELATIVE_STEP.with(|r| r.get()) * value.abs().max(1e-3);
     let (coarse, fine) = (central(h), central(h / 2.0));
     let mut worst: Real = 0.0;
     let mut report = String::new();
@@ -309,4 +323,95 @@ fn a_cable_pinned_between_control_points_matches_finite_differences() {
     let scene = Scene::from_toml(&text).expect("scene");
     let error = check(&scene, &["rod.linear_density", "world.gravity[1]"]);
     assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn a_run_s_pin_position_sensitivities_match_finite_differences() {
+    // The pinned end held away from where it starts: the first step moves it there
+    // (the start does not depend on the parameter), every step's constraint follows.
+    for method in ["implicit-euler", "bdf2"] {
+        let swinging = scene(SWINGING, method);
+        let error = check(&swinging, &["pins[0].position[1]", "pins[0].position[2]"]);
+        assert!(error < 1e-4, "{method}: relative error {error:e}");
+        // The grabbed cable's far end moved along the span and across (the span set
+        // at z = 0 by a shifted start: the differences' step is then 1e-6 m).
+        let grabbed = GRABBED
+            .replace("start = [0.0, 0.0, 0.0]", "start = [-1.0, 0.0, 0.0]")
+            .replace("end = [1.0, 0.0, 0.0]", "end = [0.0, 0.0, 0.0]")
+            .replace("to = [0.3, -0.25, 0.1]", "to = [-0.7, -0.25, 0.1]");
+        let error = check(
+            &scene(&grabbed, method),
+            &["pins[1].position[0]", "pins[1].position[1]"],
+        );
+        assert!(error < 1e-4, "{method}: relative error {error:e}");
+    }
+    // A driven pin: the parameter offsets its whole path.
+    let driven = SWINGING.replace(
+        "[[pins]]\nat = 0.0",
+        "[[pins]]\nat = 0.0\npath = [[0.0, 0.0, 0.0, 0.0], [0.5, 0.0, 0.1, 0.05]]",
+    );
+    let error = check(&scene(&driven, "bdf2"), &["pins[0].position[0]"]);
+    assert!(error < 1e-4, "driven: relative error {error:e}");
+}
+
+/// A cable lying on a plane with friction (a fixed contact stiffness), pinned at one
+/// end, its free end pulled across the plane: it turns about the pin, sliding.
+const ON_PLANE: &str = "[rod]\nrest_length = 1.0\nlinear_density = 0.1\n\
+    stretch_stiffness = 200.0\nbending_stiffness = 1e-3\ndamping = 0.3\nradius = 0.01\n\
+    control_points = 12\nstart = [0.0, 0.0105, 0.0]\nend = [1.0, 0.0105, 0.0]\n\n\
+    [[pins]]\nat = 0.0\n\n[world]\ngravity = [0.0, -9.81, 0.0]\n\n\
+    [[loads]]\nat = 1.0\nforce = [0.0, 0.0, 0.4]\n\n\
+    [contact]\nfriction = 0.3\nstiffness = 1e4\n\n\
+    [[obstacles]]\nkind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\n\n\
+    [solver]\nmethod = \"METHOD\"\ndt = 0.005\nduration = 1.0\ntolerance = 1e-13\n\n\
+    [output]\nsamples = 21\n";
+
+#[test]
+fn a_cable_sliding_on_a_plane_s_friction_sensitivities_match_finite_differences() {
+    // The lagged friction's anchors and normal forces follow the state at each step's
+    // start (`Friction::add_start_rate`): without them the density's derivative was 2.6
+    // off, with the anchors alone 1.9e-3. The differences' step is 1e-5: the friction
+    // potential's Hessian jumps where a contact passes from sticking to sliding, and
+    // steps of 1e-3 straddle such switches (errors 1e-4 … 2e-2 at 1e-3, 1e-10 … 1e-5
+    // at 1e-5).
+    for method in ["implicit-euler", "bdf2"] {
+        let sliding = scene(ON_PLANE, method);
+        let paths = [
+            "contact.friction",
+            "rod.linear_density",
+            "pins[0].position[2]",
+        ];
+        let error = check_with_step(&sliding, &paths, 1e-5);
+        assert!(error < 1e-4, "{method}: relative error {error:e}");
+    }
+}
+
+#[test]
+fn friction_paths_of_static_scenes_and_per_surface_friction_are_named() {
+    let sliding = scene(ON_PLANE, "implicit-euler");
+    let mut own = sliding.clone();
+    own.rod.friction = Some(0.2);
+    let e = dynamic_sensitivities(&own, &["contact.friction"]).expect_err("own");
+    assert!(e.to_string().contains("rod.friction is set"), "{e}");
+    let e = dynamic_sensitivities(&sliding, &["obstacles[0].friction"]).expect_err("obstacle");
+    assert!(e.to_string().contains("per-surface"), "{e}");
+    let mut none = sliding.clone();
+    if let Some(c) = none.contact.as_mut() {
+        c.friction = 0.0;
+    }
+    let e = dynamic_sensitivities(&none, &["contact.friction"]).expect_err("zero");
+    assert!(e.to_string().contains("friction = 0"), "{e}");
+    let mut resting = sliding.clone();
+    resting.solver.method = splinerod::scene::Method::Static;
+    let e = splinerod::sensitivity::static_sensitivities(&resting, &["contact.friction"])
+        .expect_err("static");
+    assert!(e.to_string().contains("only in runs"), "{e}");
+    for path in [
+        "pins[7].position[0]",
+        "pins[0].position[3]",
+        "rod.rest_length",
+    ] {
+        let e = dynamic_sensitivities(&sliding, &[path]).expect_err(path);
+        assert!(e.to_string().contains(path), "{e}");
+    }
 }

@@ -54,6 +54,15 @@ pub trait Lifecycle: Send + Sync {
         Ok(())
     }
 
+    /// Adds the derivative of the gradient by the positions frozen at the step's start
+    /// ([`begin_step`](Lifecycle::begin_step)), applied to their derivative
+    /// `start_rate` by a parameter (one per control point), to `out`: a run's forward
+    /// sensitivities carry the dependence of the frozen data on the parameters this way
+    /// (contact: the friction anchors). Default: nothing frozen depends on them.
+    fn add_start_rate(&self, rod: &Rod, start_rate: &[Vector3<Real>], out: &mut [Vector3<Real>]) {
+        let _ = (rod, start_rate, out);
+    }
+
     /// Called after the rod's knots changed through `map`; update cached data locally.
     fn on_knot_change(&mut self, rod: &Rod, map: &KnotMap) {
         let _ = (rod, map);

@@ -55,6 +55,7 @@ pub mod detect;
 mod friction;
 pub mod obstacle;
 mod pair;
+mod parameters;
 mod penalty;
 mod sample_sums;
 mod skin;
@@ -373,12 +374,14 @@ impl Contact {
             if mu == 0.0 {
                 continue;
             }
-            let lambda = -self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c));
+            let (w, gap) = (self.pair_weight(&d, c), self.gap(&d, c));
+            let lambda = -w * self.penalty.slope(gap);
+            let slope = -mu * w * self.penalty.curvature(gap);
             let len = pair_rows(&d, c, &mut weights);
             friction.push(
                 &weights[..len],
                 &c.normal,
-                mu * lambda,
+                (mu * lambda, slope),
                 Vector3::zeros(),
                 None,
             );

@@ -145,6 +145,17 @@ impl<D: Decorator> Lifecycle for D {
         }
     }
 
+    fn add_start_rate(&self, rod: &Rod, start_rate: &[Vector3<Real>], out: &mut [Vector3<Real>]) {
+        let first = self.placement(rod).first;
+        self.view(rod, |e, r| {
+            let n = r.len();
+            let (rate, out) = (&start_rate[first..first + n], &mut out[first..first + n]);
+            if let Some(l) = e.capabilities().lifecycle {
+                l.add_start_rate(r, rate, out);
+            }
+        });
+    }
+
     fn time_dependent(&self) -> bool {
         let inner = self.inner().capabilities().lifecycle;
         inner.is_some_and(|l| l.time_dependent())

@@ -72,6 +72,11 @@ impl Lifecycle for Everything {
     fn drive(&mut self, t: Real) {
         self.heard().drive = Some(t);
     }
+    fn add_start_rate(&self, _: &Rod, start_rate: &[Vector3<Real>], out: &mut [Vector3<Real>]) {
+        for (o, r) in out.iter_mut().zip(start_rate) {
+            *o += r * self.k;
+        }
+    }
     fn time_dependent(&self) -> bool {
         true
     }
@@ -235,6 +240,19 @@ fn on_segment_keeps_every_capability_of_what_it_wraps() {
         .add_obstacle_forces(&joined, &mut forces)
         .expect("forces");
     assert_eq!(forces, vec![Vector3::new(n as Real, 0.0, 0.0)]);
+
+    // The start rate: applied on the part's control points only.
+    let rate = vec![Vector3::new(1.0, 2.0, 3.0); joined.len()];
+    let mut out = vec![Vector3::zeros(); joined.len()];
+    lifecycle.add_start_rate(&joined, &rate, &mut out);
+    for (i, o) in out.iter().enumerate() {
+        let expected = if points.contains(&i) {
+            rate[i] * k
+        } else {
+            Vector3::zeros()
+        };
+        assert_eq!(*o, expected, "start rate at {i}");
+    }
 
     // Hessian remainder: asked and applied on the part's control points only.
     assert!(remainder.has_remainder(&joined));

@@ -24,7 +24,11 @@
 //! It is solved by [`crate::newton::tangents`]: `A` assembled and factorised once at
 //! \\(q_e\\) (the exact Hessian: a step that needed the definite stand-in at its
 //! solution is an error, not an approximate answer), one solve per parameter; the
-//! pins' targets move only in time, so \\(\dot c = 0\\).
+//! pins' targets' derivatives \\(\dot c\\) come from the caller
+//! ([`ParameterRates::target_rate`]: non-zero for a parameter that moves a pin).
+//! What the energies froze at the step's start (friction's anchors at \\(q_n\\)) enters
+//! \\(\partial_p\nabla E\\) through \\(S_q\\) at the start
+//! ([`ParameterRates::add_start_rate`]).
 //!
 //! **The update.** With \\(\dot x = (z - \hat q')/\beta\\): implicit Euler and BDF2 end
 //! at \\(q^+ = q_e\\), \\(v^+ = x\\), so \\(S_q^+ = z\\), \\(S_v^+ = \dot x\\); the
@@ -38,8 +42,9 @@
 //! **Exact, and not.** The derivatives are those of the discrete run (to the Newton
 //! tolerance of its steps): the Hessian is exact, every term of the residual is
 //! differentiated. What an energy takes from the start of the step (the energies'
-//! `begin_step`, e.g. a lagged friction's sticking points) is held fixed: its dependence
-//! on `p` through the previous state is left out. Steps handed over by the batched
+//! `begin_step`) is differentiated where the energy says how
+//! ([`ParameterRates::add_start_rate`]: friction's anchors), else held fixed (friction's
+//! normal forces and normals, a contact barrier's adapted stiffness). Steps handed over by the batched
 //! form ([`crate::Batched::preload`]) have no solve here to differentiate: an error.
 
 use crate::newton::Tangent;
@@ -94,6 +99,24 @@ pub trait ParameterRates {
     fn mass_rate(&self, k: usize) -> Real;
     /// \\(\partial\alpha / \partial p_k\\) (1 for the damping rate itself, else 0).
     fn damping_rate(&self, k: usize) -> Real;
+    /// Adds to `out` the derivative of the gradient through what the energies froze at
+    /// the step's start, whose positions have the derivative `start_rate` (\\(S_q\\) at
+    /// the step's start; e.g. friction's anchors). Default: nothing frozen.
+    fn add_start_rate(
+        &mut self,
+        system: &dyn System,
+        start_rate: &[Vector3<Real>],
+        out: &mut [Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
+        let _ = (system, start_rate, out);
+        Ok(())
+    }
+    /// \\(\dot c\\): the derivative by \\(p_k\\) of pin `pin`'s target (a parameter that
+    /// moves the pin). Default zero.
+    fn target_rate(&self, k: usize, pin: usize) -> Vector3<Real> {
+        let _ = (k, pin);
+        Vector3::zeros()
+    }
 }
 
 /// A scheme that carries forward sensitivities through its last step
@@ -223,6 +246,7 @@ fn tangent_solves(
     for (k, state) in states.iter().enumerate() {
         base_rates(work, state, kind);
         rates.gradient_rate(system, k, &mut work.rate)?;
+        rates.add_start_rate(system, &state.positions, &mut work.rate)?;
         let case = &mut work.cases[k];
         case.residual_rate.resize(n, Vector3::zeros());
         case.target_rates.resize(pins, Vector3::zeros());
@@ -233,16 +257,17 @@ fn tangent_solves(
         let step = stepper
             .step
             .ok_or(IntegratorError::SolverState("a solved step"))?;
-        let keep = 1.0 - step.beta / step.reach;
-        for (t, pin) in case.target_rates.iter_mut().zip(system.pins()) {
+        let ratio = step.beta / step.reach;
+        let keep = 1.0 - ratio;
+        for (p, (t, pin)) in case.target_rates.iter_mut().zip(system.pins()).enumerate() {
+            *t = rates.target_rate(k, p) * ratio;
             if keep == 0.0 {
-                *t = Vector3::zeros();
                 continue;
             }
             let row = pin
                 .row(system.rod())
                 .map_err(|_| IntegratorError::SolverState("a pin's row"))?;
-            *t = row.combine(&row.value, &work.base_q) * keep;
+            *t += row.combine(&row.value, &work.base_q) * keep;
         }
     }
     stepper.tangents(system, params, &mut work.cases)

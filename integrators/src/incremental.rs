@@ -378,6 +378,7 @@ impl Stepper {
             .extend_from_slice(self.workspace.multipliers());
         self.workspace.solver_kind(params.linear_solver, system);
         let exact = |p: &dyn NewtonProblem| p.indefinite_allowed();
+        let cases = (cases, crate::remainder::RELATIVE_TOLERANCE);
         let stats = newton::tangents(&mut problem, system, &mut self.workspace, &exact, cases);
         let mu = self.saved_mu.iter().copied();
         self.workspace.set_multipliers(mu);

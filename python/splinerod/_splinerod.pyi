@@ -119,8 +119,9 @@ class Simulation:
     def tension(self, s: _ArrayLike, member: int = 0) -> _Points: ...
     def sensitivities(self, params: Union[str, Sequence[str]], s: _ArrayLike) -> _Points:
         """Derivatives (len(params), len(s), 3) of the points at material coordinates `s`
-        (m) with respect to the scene paths `params`: a static scene's equilibrium, or
-        the end of an implicit Euler or BDF2 run."""
+        (m) with respect to the scene paths `params` (stiffnesses, densities, damping,
+        world.gravity[c], loads[i].force[c], pins[i].position[c], contact.friction): a
+        static scene's equilibrium, or the end of an implicit Euler or BDF2 run."""
     def sensitivity_history(
         self, params: Union[str, Sequence[str]], s: _ArrayLike
     ) -> Tuple[_Points, _Points]:

@@ -1,5 +1,5 @@
 """Calibration from Python (issue #48): a static scene's and a run's sensitivities
-against central finite differences of two solves or runs, and the fit of EA and EI of a clamped cable hanging
+against central finite differences of two solves or runs (a pin's position too), and the fit of EA and EI of a clamped cable hanging
 under gravity from 40 noisy markers (sigma = 0.1 mm)."""
 
 import numpy as np
@@ -173,3 +173,27 @@ def test_fit_takes_one_array_and_a_scene_object():
     result = splinerod.fit(scene, markers(), "rod.stretch_stiffness, rod.bending_stiffness")
     assert result.converged
     assert abs(result.parameters["rod.bending_stiffness"] / TRUE_EI - 1) < 0.02
+
+
+def catenary(end_x=0.8):
+    """A catenary pinned at both ends (static), its second pin driven to (end_x, 0, 0)."""
+    scene = cable(ea=100.0)
+    del scene["rod"]["bending_stiffness"]
+    scene["rod"]["end"] = [0.8, 0.0, 0.0]
+    scene["pins"] = [{"at": 0.0}, {"at": 1.0, "path": [[0, 0.8, 0, 0], [1, end_x, 0, 0]]}]
+    scene["solver"]["tolerance"] = 1e-13
+    return scene
+
+
+def test_a_pins_position_sensitivities_match_moving_its_path_end():
+    # A static solve holds a driven pin at its path's end; the parameter offsets the
+    # whole path, so differences of the path's end are its reference.
+    s = np.linspace(0.05, 1.0, 20)
+    d = splinerod.Scene(catenary()).simulation().sensitivities(["pins[1].position[0]"], s)
+    h = 1e-6
+    fd = (equilibrium(catenary(0.8 + h), s) - equilibrium(catenary(0.8 - h), s)) / (2 * h)
+    error = np.abs(d[0] - fd).max() / np.abs(fd).max()
+    assert error <= 1e-5, f"relative error {error:.2e}"
+    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rod.rest_length"]:
+        with pytest.raises(ValueError, match=bad.replace("[", r"\[").replace("]", r"\]")):
+            splinerod.Scene(catenary()).simulation().sensitivities([bad], s)

@@ -3,8 +3,9 @@
 //! kept (`toml_edit`), so the result reads as the user's own scene, ready to run.
 //!
 //! A parameter path (as [`crate::sensitivity::set_parameter`] reads it: `rod.<field>`,
-//! `rods[k].<field>`, `world.gravity[c]`, `loads[i].force[c]`) is followed key by key
-//! and index by index; a gravity the file leaves at its default is written out whole.
+//! `rods[k].<field>`, `world.gravity[c]`, `loads[i].force[c]`, `contact.friction`) is
+//! followed key by key and index by index (a fitted `pins[i].position[c]` is refused:
+//! a file's pin must agree with the rod's start); a gravity the file leaves at its default is written out whole.
 //! The result is parsed again as a scene, and every fitted value read back from it
 //! must equal the fit's bit for bit (a text round trip — shortest round-trip decimals,
 //! no arithmetic — so under any kernel set).
@@ -24,6 +25,13 @@ pub fn with_fitted_values(
     let mut doc: DocumentMut = text.parse().map_err(|e| bad(format!("{e}")))?;
     let mut expected = Scene::from_toml(text)?;
     for (name, &v) in names.iter().zip(values) {
+        if name.starts_with("pins[") {
+            let reason = format!(
+                "{name}: a scene file's pin must agree with where the rod starts, so a \
+                 fitted pin position is reported, not written"
+            );
+            return Err(bad(reason));
+        }
         set_parameter(&mut expected, name, v)?;
         if name.starts_with("world.gravity[") {
             // The whole vector: the file may leave gravity at its default.

@@ -1,11 +1,13 @@
 //! Synthetic observations of a scene with known parameters, for studies of the fit
 //! (the report's calibration section) and for users checking a calibration set-up
-//! before they measure: the static equilibrium of the true scene observed by markers
-//! and pin forces with Gaussian noise of a given σ, from a seeded ChaCha8 generator (the same
-//! seed, the same data).
+//! before they measure: the static equilibrium of the true scene observed by markers,
+//! unlabelled points and pin forces, or a run (implicit Euler, BDF2) observed by
+//! points and pin forces at step ends, with Gaussian noise of a given σ, from a seeded
+//! ChaCha8 generator (the same seed, the same data).
 
 use crate::fit::observations::{Observation, ObservationFile, ObservationKind};
-use crate::sensitivity::{static_sensitivities, StaticSensitivities};
+use crate::sensitivity::{observed_sensitivities, static_sensitivities};
+use crate::sensitivity::{StaticSensitivities, StepView};
 use crate::{Error, Scene};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -39,9 +41,7 @@ pub fn noisy_points(
     sigma: Real,
     seed: u64,
 ) -> Result<ObservationFile, Error> {
-    let length = truth.rod_spec(0).rest_length;
-    let along = Uniform::new_inclusive(0.0, length)
-        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))?;
+    let along = along_first_rod(truth)?;
     let at = |_: usize, rng: &mut ChaCha8Rng| along.sample(rng);
     let rows = noisy_rows(truth, count, (sigma, seed), at, false)?;
     let path = format!("synthetic points (σ = {sigma} m, seed {seed})");
@@ -110,10 +110,119 @@ fn equilibrium_and_noise(
     sigma: Real,
     seed: u64,
 ) -> Result<(StaticSensitivities, Normal<Real>, ChaCha8Rng), Error> {
+    let (noise, rng) = noise_and_generator(sigma, seed)?;
+    let found = static_sensitivities(truth, &[])?;
+    Ok((found, noise, rng))
+}
+
+/// The centred normal distribution of standard deviation `sigma` (checked finite and
+/// positive) and the generator seeded with `seed`.
+fn noise_and_generator(sigma: Real, seed: u64) -> Result<(Normal<Real>, ChaCha8Rng), Error> {
     if !(sigma.is_finite() && sigma > 0.0) {
         return Err(Error::field("sigma", sigma, "must be finite and positive"));
     }
     let noise = Normal::new(0.0, sigma).map_err(|e| Error::field("sigma", sigma, e.to_string()))?;
-    let found = static_sensitivities(truth, &[])?;
-    Ok((found, noise, ChaCha8Rng::seed_from_u64(seed)))
+    Ok((noise, ChaCha8Rng::seed_from_u64(seed)))
+}
+
+/// `count` unlabelled points near the run of `truth` after every `every`-th step (at
+/// material coordinates drawn uniformly over its first rod), each coordinate with
+/// Gaussian noise of standard deviation `sigma` (m, > 0), seeded with `seed`; rows with
+/// their times.
+pub fn noisy_run_points(
+    truth: &Scene,
+    (every, count): (usize, usize),
+    sigma: Real,
+    seed: u64,
+) -> Result<ObservationFile, Error> {
+    let length = truth.rod_spec(0).rest_length;
+    let along = along_first_rod(truth)?;
+    let rows = observe_run(truth, every, (sigma, seed), |view, noise, rng, out| {
+        for _ in 0..count {
+            let s = along.sample(rng);
+            let p = view.rod.point(truth.material_coordinate(s / length))?;
+            let value = std::array::from_fn(|c| p[c] + noise.sample(rng));
+            out.push((None, value));
+        }
+        Ok(())
+    })?;
+    let path = format!("synthetic points of a run (σ = {sigma} m, seed {seed})");
+    let kind = ObservationKind::Point;
+    Ok(ObservationFile { path, kind, rows })
+}
+
+/// The force of `[[pins]]` entry `pin` on the rod during the run of `truth`, after
+/// every `every`-th step, each component with Gaussian noise of standard deviation
+/// `sigma` (N, > 0), seeded with `seed`.
+pub fn noisy_run_pin_forces(
+    truth: &Scene,
+    pin: usize,
+    every: usize,
+    sigma: Real,
+    seed: u64,
+) -> Result<ObservationFile, Error> {
+    let rows = observe_run(truth, every, (sigma, seed), |view, noise, rng, out| {
+        let f = view.pin_force(pin)?;
+        out.push((Some(pin), std::array::from_fn(|c| f[c] + noise.sample(rng))));
+        Ok(())
+    })?;
+    let path = format!("synthetic force of pin {pin} during a run (σ = {sigma} N, seed {seed})");
+    let kind = ObservationKind::PinForce;
+    Ok(ObservationFile { path, kind, rows })
+}
+
+/// What an observer of a synthetic run adds after a step: `(pin, value)` rows.
+type RunRows = Vec<(Option<usize>, [Real; 3])>;
+
+/// The rows `observe` makes after every `every`-th step (> 0) of the run of `truth`,
+/// with the noise `(sigma, seed)`, timed.
+fn observe_run(
+    truth: &Scene,
+    every: usize,
+    (sigma, seed): (Real, u64),
+    mut observe: impl FnMut(
+        &StepView<'_>,
+        &Normal<Real>,
+        &mut ChaCha8Rng,
+        &mut RunRows,
+    ) -> Result<(), Error>,
+) -> Result<Vec<Observation>, Error> {
+    if every == 0 {
+        return Err(Error::field(
+            "every",
+            every,
+            "observe after every n-th step, n > 0",
+        ));
+    }
+    let (noise, mut rng) = noise_and_generator(sigma, seed)?;
+    let (mut rows, mut step, mut made) = (Vec::new(), 0, RunRows::new());
+    observed_sensitivities(truth, &[], &mut |view| {
+        step += 1;
+        if step % every != 0 {
+            return Ok(());
+        }
+        made.clear();
+        observe(view, &noise, &mut rng, &mut made)?;
+        for &(pin, value) in &made {
+            let line = rows.len() + 2;
+            let (t, s) = (Some(view.t), None);
+            rows.push(Observation {
+                t,
+                s,
+                pin,
+                value,
+                sigma,
+                line,
+            });
+        }
+        Ok(())
+    })?;
+    Ok(rows)
+}
+
+/// The uniform distribution of material coordinates over `truth`'s first rod, m.
+fn along_first_rod(truth: &Scene) -> Result<Uniform<Real>, Error> {
+    let length = truth.rod_spec(0).rest_length;
+    Uniform::new_inclusive(0.0, length)
+        .map_err(|e| Error::field("rod.rest_length", length, e.to_string()))
 }

@@ -7,8 +7,7 @@ use crate::{Error, Simulation};
 use splinerod_core::Real;
 
 /// One force per `[[pins]]` entry: an exact clamp's tangent pin (after them in the
-/// system) adds its force to its clamp's (the pair's net force; their moment is the
-/// clamp's bending moment).
+/// system) adds its force to its clamp's ([`pin_force_of`]).
 pub(crate) fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]> {
     fold_pin_forces(scene, sim, sim.integrator.pin_forces())
 }
@@ -18,24 +17,36 @@ pub(crate) fn scene_pin_forces(scene: &Scene, sim: &Simulation) -> Vec<[Real; 3]
 pub(crate) fn fold_pin_forces(
     scene: &Scene,
     sim: &Simulation,
-    mut forces: Vec<nalgebra::Vector3<Real>>,
+    forces: Vec<nalgebra::Vector3<Real>>,
 ) -> Vec<[Real; 3]> {
-    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
-        let extra = forces[i];
-        forces[j] += extra;
-    }
-    forces.truncate(scene.pins.len());
-    forces.into_iter().map(Into::into).collect()
+    let count = scene.pins.len().min(forces.len());
+    let pins = &sim.system.pins;
+    (0..count)
+        .map(|j| pin_force_of(scene, pins, &forces, j).into())
+        .collect()
 }
 
-/// `(i, j)` for every exact clamp: its tangent pin `i` in the system (below `count`) and
-/// its `[[pins]]` entry `j`.
-fn clamp_tangents<'a>(
+/// The force of `[[pins]]` entry `j` from `forces`, one per pin of the system `pins` (or
+/// their derivatives): its pin's, plus an exact clamp's tangent pin's (the pair's net
+/// force; their moment is the clamp's bending moment). Zero for a pin beyond `forces`.
+pub(crate) fn pin_force_of(
+    scene: &Scene,
+    pins: &[splinerod_core::Pin],
+    forces: &[nalgebra::Vector3<Real>],
+    j: usize,
+) -> nalgebra::Vector3<Real> {
+    let own = forces.get(j).copied().unwrap_or_default();
+    let tangents = clamp_tangents(scene, pins, forces.len()).filter(|&(_, c)| c == j);
+    tangents.fold(own, |f, (i, _)| f + forces[i])
+}
+
+/// `(i, j)` for every exact clamp: its tangent pin `i` among the system's `pins` (below
+/// `count`) and its `[[pins]]` entry `j`.
+pub(crate) fn clamp_tangents<'a>(
     scene: &'a Scene,
-    sim: &'a Simulation,
+    pins: &'a [splinerod_core::Pin],
     count: usize,
 ) -> impl Iterator<Item = (usize, usize)> + 'a {
-    let pins = &sim.system.pins;
     (scene.pins.len()..count.min(pins.len())).filter_map(move |i| {
         let pin = &pins[i];
         let clamp = scene.pins.iter().position(|p| {
@@ -54,7 +65,7 @@ pub(crate) fn pin_torques(scene: &Scene, sim: &Simulation) -> Result<Vec<[Real; 
     let mut torques = crate::run::twist::pin_torques(scene, &sim.system)?;
     let forces = sim.integrator.pin_forces();
     let rod = &sim.system.rod;
-    for (i, j) in clamp_tangents(scene, sim, forces.len()) {
+    for (i, j) in clamp_tangents(scene, &sim.system.pins, forces.len()) {
         let pin = &sim.system.pins[i];
         let next = pin.row(rod)?.first;
         let points = rod.segment_points(rod.segment_at(pin.at));

@@ -370,7 +370,7 @@ impl Scene {
     /// [`Simulation::settle`] solves the equilibrium).
     pub fn build(&self) -> Result<Simulation, Error> {
         let integrator = self.integrator()?;
-        let system = self.build_system()?;
+        let system = self.offset_pins(self.build_system()?)?;
         self.check_start_above_floor(&system.rod)?;
         self.check_start_clearance(&system)?;
         let mut sim = Simulation::new(system, integrator);

@@ -19,6 +19,7 @@ mod load;
 pub(crate) mod loads;
 pub(crate) mod obstacles;
 mod output_probe;
+mod pin_offsets;
 pub(crate) mod pins;
 pub(crate) mod plausible;
 mod probe;

@@ -19,6 +19,14 @@ pub struct PinSpec {
     /// Held position, m. Default: where the point starts; if given it must agree with the
     /// initial shape (a pin never makes the rod jump).
     pub position: Option<[f64; 3]>,
+    /// A translation of the held position, and of the whole `path`, against where the
+    /// point starts, m. Never read from a scene file (zero there): set by
+    /// [`crate::sensitivity::set_parameter`] for `pins[i].position[c]` (finite
+    /// differences, fits). The rod still starts where its shape puts it; the moved
+    /// target holds from the first step on (a static solve: at equilibrium), see
+    /// `Scene::offset_pins`.
+    #[serde(skip)]
+    pub offset: [f64; 3],
     /// Also hold the tangent direction there (a clamp; needs `rod.bending_stiffness`).
     #[serde(default)]
     pub clamp: bool,

@@ -24,16 +24,31 @@
 //! `t₀ > 0` it moves with the parameters: \\(\dot p_g = (1 - f(t))\, b(s_g) S_q(t_0)\\)
 //! enters through the spring's gradient, \\(-k\, b(s_g)\, \dot p_g\\). A default contact
 //! barrier's stiffness follows the loads: its rate enters as in the static case.
+//! `pins[i].position[c]`: no residual term; the pin's target moves,
+//! \\(\dot c = e_c\\) on the entry's pin (and an exact clamp's tangent pin) in every
+//! step's constraint \\(Gz = G\hat q' + \tfrac{\beta}{\rho}(\dot c - G\hat q')\\) — the
+//! rod starts where it does (\\(S_q(0) = 0\\)), so the first step carries the pinned
+//! point to its moved target. `contact.friction` (μ): the friction potential of the
+//! step's lags is linear in μ, \\(\partial_\mu\nabla D = \nabla D/\mu\\).
+//!
+//! **What a step freezes at its start.** Friction's lags depend on the state \\(q_n\\)
+//! the step starts from: the anchors \\(q^{start}\\) the slip is measured from, and the
+//! bound \\(\mu\lambda(g(q_n))\\) from the normal force there. Both are differentiated
+//! for every parameter through \\(S_{q,n}\\) (the energies'
+//! `Lifecycle::add_start_rate`, here through [`ParameterRates::add_start_rate`]); held
+//! fixed: the contact normal of each lag (exact on planes and the floor, not on curved
+//! obstacles or between strands), ε, which contacts exist, and the contact barrier's
+//! stiffness where it adapts at every step's start to the smallest gap.
 //!
 //! **Exact and approximated.** Every step's derivative is exact for the discrete run
 //! (to its Newton tolerance): the exact Hessian (a step whose solution needed the
-//! definite stand-in is refused), every residual term. What an energy fixes at the
-//! start of a step is held fixed: its dependence on the parameters through the state is
-//! left out — the lagged friction's anchors, and the contact barrier's stiffness, which
-//! adapts at every step's start to the smallest gap. Contact runs are close, not exact
-//! (a cable swinging onto a plane: 1e-5 … 4e-5 on the samples, up to 4e-4 on the pin
-//! forces, `tests/sensitivities_dynamic.rs`; the barrier's adaptation is the likely
-//! cause, not fully diagnosed).
+//! definite stand-in is refused), every residual term, friction's lags as above (a
+//! cable sliding on a plane with a fixed contact stiffness: 1e-10 … 1e-5 against
+//! differences at a relative step 1e-5; without the start rates the density's
+//! derivative was 2.6 off). The adapting barrier is not followed: a cable swinging onto
+//! a plane with the default barrier is within 1e-5 … 4e-5 on the samples, up to 4e-4 on
+//! the pin forces (`tests/sensitivities_dynamic.rs`; the adaptation is the likely cause,
+//! not fully diagnosed).
 //!
 //! **Refused** (an error naming the field): another integrator, adaptivity, cuts,
 //! ensembles, time error control, a step that needed sub-steps (a failed Newton solve
@@ -42,7 +57,7 @@
 //! of one of several `[[rods]]`.
 
 use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
-use super::{by_name, largest, points_at, sample_rows, shared_json};
+use super::{by_name, largest, points_at, sample_rows, shared_json, StepView};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
@@ -126,13 +141,13 @@ impl DynamicSensitivities {
 /// The run of the dynamic `scene` and its forward sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn dynamic_sensitivities(scene: &Scene, paths: &[&str]) -> Result<DynamicSensitivities, Error> {
-    observed_sensitivities(scene, paths, &mut |_, _, _| Ok(()))
+    observed_sensitivities(scene, paths, &mut |_| Ok(()))
 }
 
-/// What sees a run after each of its steps: the time, the rod, and per parameter the
-/// forward state (the derivatives of its control points and velocities). An error
-/// stops the run.
-pub type StepObserver<'a> = dyn FnMut(Real, &Rod, &[ForwardState]) -> Result<(), Error> + 'a;
+/// What sees a run after each of its steps ([`StepView`]: the time, the rod, per
+/// parameter the forward state, the pins' forces and their derivatives). An error stops
+/// the run.
+pub type StepObserver<'a> = dyn FnMut(&StepView<'_>) -> Result<(), Error> + 'a;
 
 /// [`dynamic_sensitivities`], calling `observe` after every step (a fit reads its
 /// observations there, at any material coordinate).
@@ -157,7 +172,7 @@ pub fn observed_sensitivities(
     let mut times = Vec::with_capacity(scene.step_count());
     for step in 0..scene.step_count() {
         one_step(&mut sim, dt, step, &mut rates, &mut states)?;
-        observe(sim.time, &sim.system.rod, &states)?;
+        observe(&StepView::new(scene, &sim, &states))?;
         times.push(TimeSensitivities {
             t: sim.time,
             positions: states
@@ -300,6 +315,8 @@ struct Rates {
     grab_from: Vec<Vec<Option<Vector3<Real>>>>,
     /// Per grab, whether it had not started before the step.
     waiting: Vec<bool>,
+    /// Per parameter, the derivative of each pin's target (`pins[i].position[c]`).
+    pin_rates: Vec<Vec<Vector3<Real>>>,
     scratch: Vec<Vector3<Real>>,
     /// A facade error met inside a callback.
     error: Option<Error>,
@@ -315,6 +332,10 @@ impl Rates {
         targets: Vec<Target>,
     ) -> Result<Self, Error> {
         let mut barrier = Vec::with_capacity(targets.len());
+        let mut pin_rates = vec![Vec::new(); targets.len()];
+        for (t, out) in targets.iter().zip(&mut pin_rates) {
+            super::paths::target_rates(scene, &system.pins, t, out);
+        }
         let mut probe = vec![Vector3::zeros(); system.rod.len()];
         for (path, t) in paths.iter().zip(&targets) {
             let value = target_value(scene, t);
@@ -334,6 +355,7 @@ impl Rates {
             barrier,
             inverse_density: 1.0 / system.rod.material().linear_density,
             waiting: Vec::with_capacity(system.grabs.len()),
+            pin_rates,
             scratch: Vec::with_capacity(system.rod.len()),
             error: None,
         })
@@ -372,7 +394,10 @@ impl Rates {
                     out[row.first + j][c] -= row.value[j];
                 }
             }
-            Target::Damping(_) => {}
+            Target::Friction => {
+                energy_rate(system, "friction", None, out)?;
+            }
+            Target::Damping(_) | Target::Pin { .. } => {}
         }
         if let Some(ratio) = self.barrier[k] {
             add_barrier_rate(system, ratio, out, &mut self.scratch);
@@ -426,5 +451,28 @@ impl ParameterRates for Rates {
             Target::Damping(None) => 1.0,
             _ => 0.0,
         }
+    }
+
+    fn add_start_rate(
+        &mut self,
+        system: &dyn System,
+        start_rate: &[Vector3<Real>],
+        out: &mut [Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
+        let Some(system) = system.as_any().and_then(|a| a.downcast_ref::<RodSystem>()) else {
+            return Err(IntegratorError::SolverState(
+                "forward sensitivities need the facade's system",
+            ));
+        };
+        for energy in system.acting() {
+            if let Some(lifecycle) = energy.capabilities().lifecycle {
+                lifecycle.add_start_rate(&system.rod, start_rate, out);
+            }
+        }
+        Ok(())
+    }
+
+    fn target_rate(&self, k: usize, pin: usize) -> Vector3<Real> {
+        self.pin_rates[k].get(pin).copied().unwrap_or_default()
     }
 }

@@ -105,6 +105,7 @@ impl Energy for Contact {
             lifecycle: Some(self),
             interaction: Some(self),
             summary: Some(self),
+            parameters: Some(self),
             ..Capabilities::default()
         }
     }
@@ -136,6 +137,12 @@ impl Lifecycle for Contact {
 
     fn drive(&mut self, t: Real) {
         self.move_obstacles(t);
+    }
+
+    /// The friction lags' anchors and normal forces (the `friction` module): the slip
+    /// is measured from the step's start.
+    fn add_start_rate(&self, rod: &Rod, start_rate: &[Vector3<Real>], out: &mut [Vector3<Real>]) {
+        self.friction_state().add_start_rate(rod, start_rate, out);
     }
 
     fn on_knot_change(&mut self, _rod: &Rod, _map: &KnotMap) {

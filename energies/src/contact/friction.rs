@@ -29,6 +29,10 @@ pub(crate) struct Lag {
     pub tangent: Matrix3<Real>,
     /// Largest friction force `μ λ`, N: the contact's coefficient times its normal force.
     pub bound: Real,
+    /// The derivative of `bound` by the contact's relative position \\(\sum_k w_k q_k\\)
+    /// at the step's start, N/m: \\(-\mu w \phi''(g)\, n\\) (the gap's gradient is the
+    /// normal; the normal itself held).
+    pub bound_rate: Vector3<Real>,
     /// How far the surface touched moves in the step (a moving obstacle), m: slip is
     /// measured against it.
     pub surface_motion: Vector3<Real>,
@@ -57,13 +61,13 @@ impl Friction {
     }
 
     /// Adds a lag with weights `weights`, normal `normal`, largest friction force
-    /// `bound` (`μ λ`, N) and the surface's motion in the step `surface_motion` (zero but
-    /// for moving obstacles).
+    /// `bound` (`μ λ`, N) and its derivative by the gap `bound_slope` (N/m), the
+    /// surface's motion in the step `surface_motion` (zero but for moving obstacles).
     pub fn push(
         &mut self,
         weights: &[(usize, Real)],
         normal: &Vector3<Real>,
-        bound: Real,
+        (bound, bound_slope): (Real, Real),
         surface_motion: Vector3<Real>,
         obstacle: Option<usize>,
     ) {
@@ -72,6 +76,7 @@ impl Friction {
             len: weights.len().min(2 * MAX_ORDER),
             tangent: Matrix3::identity() - normal * normal.transpose(),
             bound,
+            bound_rate: normal * bound_slope,
             surface_motion,
             obstacle,
         };
@@ -114,17 +119,67 @@ impl Friction {
 
     /// Adds \\(\partial D/\partial q\\).
     pub fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
+        self.add_scaled_gradient(rod, 1.0, gradient);
+    }
+
+    /// Adds `scale` \\(\partial D/\partial q\\) (with `scale = 1/μ`: the derivative of
+    /// the gradient by a coefficient μ every lag's bound `μλ` is linear in, the lags held).
+    pub fn add_scaled_gradient(&self, rod: &Rod, scale: Real, gradient: &mut [Vector3<Real>]) {
         if !self.active(rod) {
             return;
         }
         let eps = self.eps;
         for lag in &self.lags {
             let u = self.slip(lag, &rod.positions);
-            let force = u * (lag.bound / u.norm().max(eps));
+            let force = u * (scale * lag.bound / u.norm().max(eps));
             for &(k, w) in &lag.weights[..lag.len] {
                 gradient[k] += force * w;
             }
         }
+    }
+
+    /// Adds the derivative of \\(\partial D/\partial q\\) by the step's start positions
+    /// applied to their derivative `start_rate` (one per control point). With
+    /// \\(\dot a = \sum_j w_j \dot q_j^{start}\\): the slip is
+    /// \\(u = T(\sum_k w_k (q_k - q_k^{start}) - m)\\), so each lag adds
+    /// \\(-w_k H_u T \dot a\\) (`H_u` the Hessian block of [`Self::add_hessian`]), and
+    /// its bound \\(\mu\lambda\\) follows the gap at the start, adding
+    /// \\(w_k\, u\, (\partial_a(\mu\lambda) \cdot \dot a)/\max(|u|, \epsilon)\\). The
+    /// normal (and so `T`) and ε are held: exact on planes and the floor.
+    pub fn add_start_rate(
+        &self,
+        rod: &Rod,
+        start_rate: &[Vector3<Real>],
+        out: &mut [Vector3<Real>],
+    ) {
+        if !self.active(rod) || start_rate.len() != self.start.len() {
+            return;
+        }
+        for lag in &self.lags {
+            let weights = &lag.weights[..lag.len];
+            let moved: Vector3<Real> = weights.iter().map(|&(k, w)| start_rate[k] * w).sum();
+            let u = self.slip(lag, &rod.positions);
+            let bound_rate = lag.bound_rate.dot(&moved);
+            let rate = u * (bound_rate / u.norm().max(self.eps))
+                - self.block(lag, &rod.positions) * (lag.tangent * moved);
+            for &(k, w) in weights {
+                out[k] += rate * w;
+            }
+        }
+    }
+
+    /// The Hessian block \\(\mu\lambda H_u\\) of `lag` at the positions `q`.
+    fn block(&self, lag: &Lag, q: &[Vector3<Real>]) -> Matrix3<Real> {
+        // The same operations as the Hessian always had (bit for bit).
+        let u = self.slip(lag, q);
+        let y = u.norm();
+        let h = if y < self.eps {
+            lag.tangent / self.eps
+        } else {
+            let along = u / y;
+            (lag.tangent - along * along.transpose()) / y
+        };
+        h * lag.bound
     }
 
     /// Adds to `forces[i]` the friction force the rod exerts on obstacle `i` at its
@@ -146,16 +201,8 @@ impl Friction {
         if !self.active(rod) {
             return;
         }
-        let eps = self.eps;
         for lag in &self.lags {
-            let u = self.slip(lag, &rod.positions);
-            let y = u.norm();
-            let h = if y < eps {
-                lag.tangent / eps
-            } else {
-                let along = u / y;
-                (lag.tangent - along * along.transpose()) / y
-            } * lag.bound;
+            let h = self.block(lag, &rod.positions);
             let weights = &lag.weights[..lag.len];
             for (a, &(i, wi)) in weights.iter().enumerate() {
                 for &(j, wj) in &weights[a..] {

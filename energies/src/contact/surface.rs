@@ -124,13 +124,19 @@ impl Contact {
     }
 
     /// Freezes the surfaces' friction data for a step of `dt` seconds (largest friction
-    /// forces `μ λ`, directions and, for a moving obstacle, how far its surface moves in
+    /// forces `μ λ` with their derivatives by the gap, directions and, for a moving obstacle, how far its surface moves in
     /// the step); contacts of coefficient 0 are left out.
     pub(crate) fn push_surface_friction(
         &self,
         rod: &Rod,
         dt: Real,
-        mut push: impl FnMut(&[(usize, Real)], &Vector3<Real>, Real, Vector3<Real>, Option<usize>),
+        mut push: impl FnMut(
+            &[(usize, Real)],
+            &Vector3<Real>,
+            (Real, Real),
+            Vector3<Real>,
+            Option<usize>,
+        ),
     ) -> Result<(), CoreError> {
         let mut rows = [(0, 0.0); 2 * MAX_ORDER];
         self.for_each_surface_point(rod, |p| {
@@ -143,10 +149,17 @@ impl Contact {
                 return;
             }
             let lambda = -p.weight * self.penalty.slope(p.gap);
+            let slope = -mu * p.weight * self.penalty.curvature(p.gap);
             let moved = p
                 .obstacle
                 .map_or(Vector3::zeros(), |i| self.motion.step(i, dt));
-            push(&rows[..len], &p.normal, mu * lambda, moved, p.obstacle);
+            push(
+                &rows[..len],
+                &p.normal,
+                (mu * lambda, slope),
+                moved,
+                p.obstacle,
+            );
         })
     }
 }

@@ -8,9 +8,12 @@
 //! replaced by \\(\partial r/\partial p\\), the pins' gaps by \\(\dot c\\) and the iterate by
 //! zero, so one factorisation (by the solver the Newton iterations use: banded, sparse
 //! or periodic; the pins' Schur complement; the remainder's correction by conjugate
-//! gradients to relative 1e-9) serves every parameter.
+//! gradients, for a static scene to relative 1e-13, [`TANGENT_TOLERANCE`], tighter than
+//! a Newton step's 1e-9) serves every parameter.
 
 use super::{factor_matrix, solve_factored, NewtonProblem, NewtonWorkspace};
+#[cfg(doc)]
+use crate::remainder::{RELATIVE_TOLERANCE, TANGENT_TOLERANCE};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
 use splinerod_core::Real;
@@ -33,13 +36,16 @@ pub struct Tangent {
 /// Hessian: `exact` tells whether the problem still assembles it after the
 /// factorisation, which may have switched it to a definite fallback — then an error,
 /// not an approximate answer) and solves every
-/// tangent problem with it. Returns the counters of the factorisation and solves.
+/// tangent problem with it, the Hessian remainder's correction to the relative accuracy
+/// `relative` (static sensitivities: [`TANGENT_TOLERANCE`]; a run's steps: the Newton
+/// steps' [`RELATIVE_TOLERANCE`], whose cost they repeat every step). Returns the
+/// counters of the factorisation and solves.
 pub fn tangents(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
     ws: &mut NewtonWorkspace,
     exact: &dyn Fn(&dyn NewtonProblem) -> bool,
-    cases: &mut [Tangent],
+    (cases, relative): (&mut [Tangent], Real),
 ) -> Result<StepStats, IntegratorError> {
     let n = system.rod().len();
     ws.resize(n, system.pins().len());
@@ -54,7 +60,9 @@ pub fn tangents(
         });
     }
     let zeros = std::mem::take(&mut ws.origin);
+    ws.remainder.set_relative_tolerance(Some(relative));
     let solved = solve_cases(problem, system, ws, &zeros, cases, &mut stats);
+    ws.remainder.set_relative_tolerance(None);
     ws.origin = zeros;
     ws.carried.active = false;
     solved.map(|()| stats)

@@ -349,6 +349,7 @@ impl StaticSolver {
         self.workspace
             .solver_kind(self.params.linear_solver, system);
         let exact = |p: &dyn newton::NewtonProblem| p.indefinite_allowed();
+        let cases = (cases, crate::remainder::TANGENT_TOLERANCE);
         let stats = newton::tangents(&mut problem, system, &mut self.workspace, &exact, cases);
         self.workspace.set_multipliers(forces.into_iter());
         stats

@@ -53,14 +53,15 @@ pub(crate) enum Command {
         scene: PathBuf,
         /// Parameters by scene path, comma-separated: rod.stretch_stiffness,
         /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rod.damping
-        /// (runs), rods[k].…, world.gravity[c], loads[i].force[c].
+        /// (runs), rods[k].…, world.gravity[c], loads[i].force[c], pins[i].position[c],
+        /// contact.friction (runs).
         #[arg(long, value_name = "P1,P2,…")]
         params: String,
         /// Where to write the sensitivities as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Fits scene parameters to observations (static scenes; markers of runs).
+    /// Fits scene parameters to observations of a static scene or a run.
     Fit {
         /// The scene (static, or an implicit Euler or BDF2 run), its values the start.
         scene: PathBuf,
