@@ -20,6 +20,7 @@ mod model;
 mod pins;
 mod scene;
 mod simulation;
+mod stepping;
 mod system;
 
 use pyo3::prelude::*;

@@ -14,7 +14,6 @@ use crate::arrays::{
 use crate::driver::Driver;
 use crate::errors::{guard, scene_error, shield, IntoPyResult, SplinerodError};
 use crate::integrator::Integrator;
-use crate::interrupt::Interrupt;
 use crate::system::RodSystem;
 use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2, PyArray3};
@@ -26,8 +25,8 @@ use splinerod::{Real, SceneRun};
 /// A simulation: `Scene.simulation()` or `Simulation(system, integrator, dt)`.
 #[pyclass(module = "splinerod")]
 pub struct Simulation {
-    driver: Driver,
-    poisoned: bool,
+    pub(crate) driver: Driver,
+    pub(crate) poisoned: bool,
 }
 
 impl Simulation {
@@ -56,41 +55,6 @@ impl Simulation {
             Some(i) if i < count => Ok(i..i + 1),
             Some(i) => Err(no_member(py, i, count)),
         }
-    }
-
-    /// Steps a dynamic simulation needs to reach `until` (the scene's end by default).
-    fn steps_until(&self, py: Python<'_>, until: Option<Real>) -> PyResult<usize> {
-        let (done, scheduled, dt) = match &self.driver {
-            Driver::Scene(run) => (run.stages_done(), Some(run.stage_count()), run.dt()),
-            Driver::Code { dt, calls, .. } => (*calls, None, *dt),
-        };
-        if self.driver.is_static() {
-            return Ok(usize::from(done == 0));
-        }
-        let Some(until) = until else {
-            return scheduled.map(|n| n.saturating_sub(done)).ok_or_else(|| {
-                scene_error(
-                    py,
-                    Some("until"),
-                    "a simulation built in code needs `until`",
-                )
-            });
-        };
-        let until = crate::arrays::finite(py, "until", until)?;
-        let left = (until - self.driver.sims()[0].time) / dt;
-        Ok((left * (1.0 - 1e-12)).ceil().max(0.0) as usize)
-    }
-
-    /// Makes `n` steps with the GIL released; Ctrl-C raises `KeyboardInterrupt` within
-    /// about a second, the state the one after the last completed step
-    /// ([`crate::interrupt`]).
-    fn advance(&mut self, py: Python<'_>, n: usize) -> PyResult<()> {
-        let interrupt = Interrupt::new();
-        let (driver, cancel) = (&mut self.driver, &interrupt.cancel);
-        guard(&mut self.poisoned, || {
-            let made = py.detach(|| driver.advance(n, cancel));
-            interrupt.result(py, made)
-        })
     }
 }
 
