@@ -75,9 +75,10 @@ impl Ensemble {
     }
 
     /// `steps` steps of `dt`: the same results, bit for bit, as [`Ensemble::step`]
-    /// called `steps` times (a member whose step fails keeps its state at that step's
-    /// start and tries the next step from there; the error of the first failing member
-    /// by index is returned at the end), faster. Each group of [`LANES`] members takes
+    /// called `steps` times under the same kernel set, for any thread count and shard
+    /// (a member whose step fails keeps its state at that step's start and tries the
+    /// next step from there; the error of the first failing member by index is
+    /// returned at the end), faster. Each group of [`LANES`] members takes
     /// all its steps before the next group starts (so its data stays in the caches),
     /// and a group whose members are all batched with nothing to do between steps but
     /// the solve keeps its state in the lanes from one step to the next and writes it

@@ -120,10 +120,10 @@ fn settings(members: &mut [Simulation], dt: Real, batched: bool) -> Option<Newto
         }
         common = Some(params);
     }
-    members
-        .iter()
-        .all(|m| same_shape(m, &members[0]))
-        .then_some(common)?
+    if !members.iter().all(|m| same_shape(m, &members[0])) {
+        return None;
+    }
+    common
 }
 
 /// Whether a batched member's step does nothing but the solve (module docs).

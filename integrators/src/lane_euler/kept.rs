@@ -56,7 +56,7 @@ impl LaneEuler {
     /// results bit for bit), with its state kept in the lanes: the `first` step of a run
     /// reads the rods' states, a later one starts from the lanes' end state of the
     /// previous call — the rods must then be the same (read only for their shape, pins,
-    /// damping and tolerance) and the previous call complete ([`Self::kept_complete`]).
+    /// damping and tolerance) and the previous call complete (it returned `true`).
     /// Returns whether every lane completed the step. [`Self::kept`] gives each lane's
     /// result of the run's last complete step: an incomplete step leaves it as it was.
     pub fn step_kept(&mut self, step: &LaneStep<'_>, first: bool) -> Result<bool, LaneFallback> {
@@ -69,11 +69,6 @@ impl LaneEuler {
         self.kept.complete = false;
         self.dispatch(step, if first { Keep::First } else { Keep::Next })?;
         Ok(self.kept.complete)
-    }
-
-    /// Whether the last [`Self::step_kept`] completed in every lane.
-    pub fn kept_complete(&self) -> bool {
-        self.kept.complete
     }
 
     /// Lane `l`'s last completed kept step of the run: its start state (positions,
