@@ -8,6 +8,10 @@ use crate::{Error, Scene};
 /// Every bundled scene, `(name, TOML text)`, sorted by name; the name is the file stem
 /// in `scenes/` (`"hanging_cable"` for `scenes/hanging_cable.toml`).
 pub const SCENES: &[(&str, &str)] = &[
+    (
+        "body_pendulum",
+        include_str!("../scenes/body_pendulum.toml"),
+    ),
     ("cantilever", include_str!("../scenes/cantilever.toml")),
     (
         "catenary_static",

@@ -18,6 +18,7 @@ mod bad_input_overhand;
 mod batched;
 mod bench;
 mod bending;
+mod bodies;
 mod bundled;
 mod capstan_turn;
 mod catenary;

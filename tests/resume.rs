@@ -136,6 +136,11 @@ fn midpoint_and_bdf2_resume_exactly() {
 }
 
 #[test]
+fn a_scene_with_a_rigid_body_resumes_exactly() {
+    resumes_exactly("bodies", Path::new("scenes/body_pendulum.toml"), &[300]);
+}
+
+#[test]
 fn static_solve_resumes_exactly() {
     resumes_exactly("static", Path::new("scenes/catenary_static.toml"), &[0]);
 }

@@ -35,6 +35,7 @@
 pub mod banded;
 pub mod basis;
 pub mod block_banded;
+pub mod body;
 pub mod bspline;
 pub mod cancel;
 pub mod check;
@@ -63,6 +64,7 @@ pub type Real = f64;
 pub use banded::SymBanded;
 pub use basis::{BasisSpace, BasisValues, Span, MAX_BASIS_FUNCTIONS, MAX_DEGREE};
 pub use block_banded::{add_operator_columns, BlockBanded, FarBlock, LowRank};
+pub use body::{Attachment, RigidBody};
 pub use bspline::BSplineSpace;
 pub use cancel::Cancel;
 pub use check::Requirement;

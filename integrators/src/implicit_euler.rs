@@ -98,6 +98,7 @@ impl Integrator for ImplicitEuler {
                 .stepper
                 .accept(system, &mut p.end, (p.stats, &p.forces), dt);
         }
+        self.stepper.bodies = true;
         self.stepper.begin(system, dt)?;
         let step = Increment {
             beta: dt,

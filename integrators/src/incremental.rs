@@ -21,10 +21,12 @@
 //! `αM` is \\(\operatorname{diag}(\alpha_i) M\\), one rate per control point.
 
 use crate::error::positive;
-use crate::newton::{self, NewtonParams, NewtonProblem, NewtonWorkspace};
+use crate::newton::{self, BodyForm, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::{IntegratorError, StepStats, System};
 use nalgebra::Vector3;
-use splinerod_core::{rod::check_finite, BasisValues, BlockBanded, HessianKind, Pin, Real, Rod};
+use splinerod_core::{
+    rod::check_finite, BasisValues, BlockBanded, HessianKind, Pin, Real, RigidBody, Rod,
+};
 
 /// Scalars of one incremental problem.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,6 +89,8 @@ struct IncrementalProblem<'a> {
     scratch: &'a mut [Vector3<Real>],
     hessian: HessianKind,
     definite_only: bool,
+    /// Whether rigid bodies move with the step (the scheme's base is its start state).
+    bodies: bool,
 }
 
 impl IncrementalProblem<'_> {
@@ -209,6 +213,13 @@ impl NewtonProblem for IncrementalProblem<'_> {
         !self.definite_only && self.hessian == HessianKind::Exact
     }
 
+    fn body_form(&self) -> Option<BodyForm> {
+        self.bodies.then_some(BodyForm::Dynamic {
+            beta: self.step.beta,
+            reach: self.step.reach,
+        })
+    }
+
     /// Every iteration starts from the exact Hessian again: the definite one converges
     /// only linearly, and is needed only while the exact step climbs the merit.
     fn on_step(&mut self, _step_length: Real) {
@@ -244,6 +255,12 @@ pub(crate) struct Stepper {
     /// Never factorise an indefinite matrix: every step descends to a minimum of the
     /// merit, never to a saddle (the static solver's continuation path needs this).
     pub definite_only: bool,
+    /// Whether the scheme moves rigid bodies ([`System::bodies`]): its base is the start
+    /// state (implicit Euler, the static solver's pseudo-time steps). Default false: a
+    /// system with bodies is refused.
+    pub bodies: bool,
+    /// The bodies at the start of the step (for rollback).
+    bodies0: Vec<RigidBody>,
 }
 
 impl Stepper {
@@ -299,6 +316,7 @@ impl Stepper {
             scratch: &mut self.scratch,
             hessian: HessianKind::Exact,
             definite_only: self.definite_only,
+            bodies: self.bodies,
         };
         let stats = newton::solve(
             &mut problem,
@@ -372,6 +390,7 @@ impl Stepper {
             scratch: &mut self.scratch,
             hessian: HessianKind::Exact,
             definite_only: false,
+            bodies: false,
         };
         self.saved_mu.clear();
         self.saved_mu
@@ -415,6 +434,9 @@ impl Stepper {
             let rod = system.rod_mut();
             rod.positions.copy_from_slice(&self.q0);
             rod.velocities.copy_from_slice(&self.v0);
+            system.bodies_mut().clone_from_slice(&self.bodies0);
+        } else if self.step.is_some() {
+            self.workspace.write_bodies(system);
         }
         result
     }

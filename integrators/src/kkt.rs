@@ -44,6 +44,19 @@ pub(crate) struct Constraints {
     /// material coordinate (bits) and tangent flag.
     rows_for: Option<u64>,
     row_pins: Vec<(u64, bool)>,
+    /// Pins held by rigid bodies: never eliminated nor augmented, with the bodies'
+    /// compliance and gap offsets ([`crate::newton`]'s body coupling).
+    coupling: Coupling,
+}
+
+/// The rigid bodies' part of the Schur complement: which pins they hold, the
+/// compliance blocks \(J B^{-1} J^T\) between them and the gap offsets
+/// \(J B^{-1} r_b\).
+#[derive(Debug, Default)]
+struct Coupling {
+    held: Vec<usize>,
+    blocks: Vec<(usize, usize, Matrix3<Real>)>,
+    offsets: Vec<(usize, Vector3<Real>)>,
 }
 
 impl Constraints {
@@ -79,13 +92,36 @@ impl Constraints {
         // A closed rod's copies across the seam are one unknown: eliminating one of them
         // alone would split it, so its pins all go through the Schur complement.
         match rod.is_closed() {
-            false => self.points.setup(&self.rows, &self.projectors)?,
-            true => self.points.setup(&[], &[])?,
+            false => self
+                .points
+                .setup(&self.rows, &self.projectors, &self.coupling.held)?,
+            true => self.points.setup(&[], &[], &[])?,
         }
         self.general.clear();
         self.general
             .extend((0..pins.len()).filter(|&p| !self.points.contains(p)));
         Ok(())
+    }
+
+    /// Declares the pins rigid bodies hold (before [`Self::setup`]); empty: none.
+    pub fn set_held(&mut self, held: impl Iterator<Item = usize>) {
+        self.coupling.held.clear();
+        self.coupling.held.extend(held);
+        self.coupling.blocks.clear();
+        self.coupling.offsets.clear();
+    }
+
+    /// The bodies' compliance blocks `(p, q, C_pq)` and gap offsets `(p, d_p)` for the
+    /// next factorisation and solve.
+    pub fn set_coupling(
+        &mut self,
+        blocks: impl Iterator<Item = (usize, usize, Matrix3<Real>)>,
+        offsets: impl Iterator<Item = (usize, Vector3<Real>)>,
+    ) {
+        self.coupling.blocks.clear();
+        self.coupling.blocks.extend(blocks);
+        self.coupling.offsets.clear();
+        self.coupling.offsets.extend(offsets);
     }
 
     /// Number of pins.
@@ -125,7 +161,10 @@ impl Constraints {
         if rho == 0.0 {
             return;
         }
-        for (b, proj) in self.rows.iter().zip(&self.projectors) {
+        for (p, (b, proj)) in self.rows.iter().zip(&self.projectors).enumerate() {
+            if self.coupling.held.contains(&p) {
+                continue;
+            }
             for i in 0..b.order {
                 for j in i..b.order {
                     let w = rho * b.value[i] * b.value[j];
@@ -141,6 +180,9 @@ impl Constraints {
             return;
         }
         for (p, b) in self.rows.iter().enumerate() {
+            if self.coupling.held.contains(&p) {
+                continue;
+            }
             let e = self.projectors[p] * (self.targets[p] - self.apply_row(p, x)) * rho;
             for k in 0..b.order {
                 out[b.first + k] += e * b.value[k];
@@ -182,6 +224,19 @@ impl Constraints {
             for a in 0..3 {
                 for c in 0..3 {
                     self.schur[(3 * g + a) * m + 3 * g + c] += free[(a, c)];
+                }
+            }
+        }
+        for (p, q, block) in &self.coupling.blocks {
+            let at = |p| self.general.iter().position(|&g| g == p);
+            let (Some(gp), Some(gq)) = (at(*p), at(*q)) else {
+                return Err(IntegratorError::SolverState(
+                    "a body's pin is not in the Schur complement",
+                ));
+            };
+            for a in 0..3 {
+                for c in 0..3 {
+                    self.schur[(3 * gp + a) * m + 3 * gq + c] += block[(a, c)];
                 }
             }
         }
@@ -299,7 +354,9 @@ impl Constraints {
         self.sol.clear();
         for &p in &self.general {
             let gap = if targets {
-                self.projectors[p] * (self.targets[p] - self.apply_row(p, x))
+                let offset = self.coupling.offsets.iter().find(|(q, _)| *q == p);
+                let offset = offset.map_or(Vector3::zeros(), |(_, d)| *d);
+                self.projectors[p] * (self.targets[p] - self.apply_row(p, x)) - offset
             } else {
                 Vector3::zeros()
             };

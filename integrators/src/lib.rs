@@ -63,7 +63,9 @@ pub use newton::NewtonParams;
 pub use statics::{StaticParams, StaticSolver, CONSTRAINT_TOLERANCE, MAX_MULTIPLIER_UPDATES};
 
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, HessianKind, Pin, Real, Rod, SavedState, StateReader};
+use splinerod_core::{
+    Attachment, BlockBanded, HessianKind, Pin, Real, RigidBody, Rod, SavedState, StateReader,
+};
 
 /// What an integrator needs of a mechanical system: a rod (state, mass, damping), its
 /// pins and its total potential energy with derivatives.
@@ -144,6 +146,19 @@ pub trait System: Send + Sync {
     /// Default `None`.
     fn as_any(&self) -> Option<&dyn std::any::Any> {
         None
+    }
+    /// The rigid bodies the rod's pins hold ([`System::attachments`]), solved in the same
+    /// Newton system by the schemes that support them. Default: none.
+    fn bodies(&self) -> &[RigidBody] {
+        &[]
+    }
+    /// The bodies, to write a solved step's state into.
+    fn bodies_mut(&mut self) -> &mut [RigidBody] {
+        &mut []
+    }
+    /// Which pins the bodies hold, and where. Default: none.
+    fn attachments(&self) -> &[Attachment] {
+        &[]
     }
 }
 

@@ -54,17 +54,18 @@ fn single_point(row: &BasisValues) -> Option<usize> {
 }
 
 impl PointPins {
-    /// Finds the pins to eliminate among `rows` (with the pins' `projectors`); two pins
-    /// on one control point conflict.
+    /// Finds the pins to eliminate among `rows` (with the pins' `projectors`), all but
+    /// those `kept` for the Schur complement; two pins on one control point conflict.
     pub fn setup(
         &mut self,
         rows: &[BasisValues],
         projectors: &[Matrix3<Real>],
+        kept: &[usize],
     ) -> Result<(), IntegratorError> {
         self.pins.clear();
         self.projectors.clear();
         for (p, row) in rows.iter().enumerate() {
-            if let Some(k) = single_point(row) {
+            if let Some(k) = single_point(row).filter(|_| !kept.contains(&p)) {
                 if self.pins.iter().any(|&(_, other)| other == k) {
                     return Err(IntegratorError::RedundantPins);
                 }

@@ -19,10 +19,11 @@
 //! **Imports run one way** (kept by `tests/run_imports.rs`): `runner` → `main_loop` →
 //! `state`, `control`, `checkpoint`, `observe`, `result`, `ensemble`; `state` → `tally`;
 //! `session` → `main_loop`; `result` → `rods`, `pins`, `tally`, `totals`, `twist`,
-//! `shard`, `ensemble`, `knot_track`; the leaves (`totals`, `twist`, `knot_track`) import
+//! `shard`, `ensemble`, `knot_track`; the leaves (`totals`, `twist`, `knot_track`, `bodies`) import
 //! no other file of `run/`. Nothing calls back up: the loop calls the outputs, the
 //! tallies and the checkpoint, never the other way round.
 
+pub mod bodies;
 pub mod checkpoint;
 pub mod control;
 pub mod ensemble;

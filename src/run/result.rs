@@ -3,6 +3,7 @@
 //! state and tally, with the per-rod results of [`crate::run::rods`], the pins' forces
 //! and torques and the twist) and adds the ensemble's summaries.
 
+use crate::run::bodies::BodyTrack;
 use crate::run::ensemble::MemberSummary;
 use crate::run::knot_track::KnotTrack;
 use crate::run::pins::{pin_torques, scene_pin_forces};
@@ -45,6 +46,9 @@ pub struct RunResult {
     pub samples: Samples,
     /// Trajectories of the probed material points.
     pub probes: Vec<Probe>,
+    /// The rigid bodies' tracks (`[[bodies]]`); absent from the JSON without bodies.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub bodies: Vec<BodyTrack>,
     /// Final energies, J: `kinetic` and one entry per energy term (`stretch`, `gravity`).
     pub energy: BTreeMap<String, Real>,
     /// Final knot vector, fractions of the rest length.
@@ -134,6 +138,7 @@ pub(crate) fn finish(
     let samples = end_samples(scene, system)?;
     let mut energy = BTreeMap::from([("kinetic".to_string(), rod.kinetic_energy())]);
     energy.extend(system.energy_breakdown());
+    energy.extend(crate::run::bodies::energies(system));
     let l = rod.material().rest_length;
     let statics = sim.integrator.role() == Role::Equilibrium;
     let pin_forces = scene_pin_forces(scene, sim);
@@ -146,6 +151,7 @@ pub(crate) fn finish(
         wall_seconds: wall,
         samples,
         probes: tally.probes,
+        bodies: tally.bodies,
         energy,
         knots: rod.basis().knots().iter().map(|k| k / l).collect(),
         solver: tally.solver,

@@ -3,6 +3,7 @@
 //! estimates, stage times) and the scene's cuts it makes when they fall due
 //! ([`CutSchedule`]).
 
+use crate::run::bodies::BodyTrack;
 use crate::run::knot_track::KnotTrack;
 use crate::run::totals::{ContactStats, SolverTotals};
 use crate::scene::Scene;
@@ -32,6 +33,7 @@ pub struct Probe {
 pub(crate) struct Tally {
     pub(crate) solver: SolverTotals,
     pub(crate) probes: Vec<Probe>,
+    pub(crate) bodies: Vec<BodyTrack>,
     pub(crate) history: Vec<[Real; 2]>,
     pub(crate) contact: Option<ContactStats>,
     pub(crate) knot: Option<KnotTrack>,
@@ -53,6 +55,7 @@ impl Tally {
         let mut tally = Self {
             solver: SolverTotals::default(),
             probes: probes_at_start(scene, system)?,
+            bodies: crate::run::bodies::tracks_at_start(system),
             history: vec![[0.0, system.rod.distinct_len() as Real]],
             contact: None,
             knot: None,
@@ -106,6 +109,7 @@ impl Tally {
             self.hinge_steps += 1;
         }
         self.probe(scene, &sim.system, sim.time)?;
+        crate::run::bodies::record_simulation(&mut self.bodies, sim);
         Ok(start.elapsed().as_secs_f64())
     }
 

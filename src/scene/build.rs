@@ -179,7 +179,10 @@ impl Scene {
         if let Some(contact) = self.contact()?.filter(|_| !self.part_of_world) {
             system = system.with_energy(contact);
         }
-        Ok(system)
+        if self.part_of_world {
+            return Ok(system);
+        }
+        self.add_bodies(system)
     }
 
     /// The `[[pins]]`, in order, then the exact clamps' tangent pins (after them, so a

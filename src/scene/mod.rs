@@ -8,6 +8,7 @@
 
 pub(crate) mod adapt;
 mod auto_form;
+pub(crate) mod bodies;
 mod build;
 pub(crate) mod closed;
 mod coarse_start;
@@ -30,6 +31,7 @@ pub(crate) mod solver;
 
 pub(crate) use crate::error::{finite_vec, fraction, non_negative, positive};
 pub use crate::scene::adapt::{AdaptivitySpec, CutSpec, GrabSpec};
+pub use crate::scene::bodies::{BodySpec, InertiaSpec};
 pub use crate::scene::closed::RingSpec;
 pub use crate::scene::contact::{ContactSpec, DEFAULT_TOLERANCE_RADII};
 pub use crate::scene::ensemble::EnsembleSpec;
@@ -85,6 +87,9 @@ pub struct Scene {
     /// Point loads.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
+    /// Rigid bodies the pins may hold (`[[pins]] body`).
+    #[serde(default)]
+    pub bodies: Vec<BodySpec>,
     /// Set on the one-rod scenes a `[[rods]]` scene builds its rods from
     /// ([`Scene::build_system`]): default quadrature, no contact of their own.
     #[serde(skip)]
@@ -394,6 +399,7 @@ impl Scene {
             non_negative("rod.friction", mu)?;
         }
         self.validate_obstacles()?;
+        self.validate_bodies()?;
         self.loads()?;
         crate::scene::adapt::validate(
             self.adaptivity.as_ref(),

@@ -51,6 +51,9 @@ pub struct PinSpec {
     /// clamp point) against its start, interpolated like `path`
     /// ([`crate::world::gripper`]). The first is `[0, 0, 0, 0, 0, 0, 0]`.
     pub pose: Option<Vec<[f64; 7]>>,
+    /// The `[[bodies]]` entry holding this point where it starts (a ball joint; with
+    /// `clamp = true` at an end, a weld). Default: none (held in space).
+    pub body: Option<String>,
 }
 
 /// `[world]`.

@@ -325,7 +325,7 @@ impl Scene {
             }
             system = system.with_energy(contact);
         }
-        Ok(system)
+        self.add_bodies(system)
     }
 }
 

@@ -262,3 +262,38 @@ pub fn quaternion_rotation(q: [Real; 4]) -> Result<Matrix3<Real>, Error> {
     let unit = nalgebra::UnitQuaternion::new_unchecked(quaternion);
     Ok(unit.to_rotation_matrix().into_inner())
 }
+
+impl crate::RodSystem {
+    /// Whether a gripper follows a pose path.
+    pub fn has_posed_grippers(&self) -> bool {
+        self.grippers.iter().any(|g| g.path.is_some())
+    }
+
+    /// Puts gripper `k` in `pose` (its pins and the energies measured against its
+    /// clamp frame), from the next step on; a gripper with a pose path is moved by it
+    /// again at the next step. An error naming `index` if there is no gripper `k`.
+    pub fn set_gripper_pose(&mut self, k: usize, pose: Pose) -> Result<(), Error> {
+        let count = self.grippers.len();
+        let Some(gripper) = self.grippers.get_mut(k) else {
+            let reason = format!("the system has {count} gripper(s)");
+            return Err(Error::field("index", k, reason));
+        };
+        gripper.apply(pose, &mut self.pins, &mut self.energies);
+        Ok(())
+    }
+
+    /// Moves every gripper with a pose path to its pose at time `t`.
+    pub fn drive_grippers(&mut self, t: Real) {
+        let Self {
+            grippers,
+            pins,
+            energies,
+            ..
+        } = self;
+        for g in grippers.iter_mut() {
+            if let Some(pose) = g.scheduled(t) {
+                g.apply(pose, pins, energies);
+            }
+        }
+    }
+}

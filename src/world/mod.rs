@@ -7,6 +7,7 @@
 //! [`Simulation`]: crate::Simulation
 //! [`Ensemble`]: crate::Ensemble
 
+pub mod bodies;
 pub(crate) mod ensemble;
 pub mod estimate;
 pub(crate) mod grab;

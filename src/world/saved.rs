@@ -113,6 +113,22 @@ pub struct SimulationState {
     pub protected: Option<Vec<(Real, usize)>>,
     /// The error estimator's schedule and last estimate, if on.
     pub estimation: Option<Numbers>,
+    /// Each rigid body's state.
+    pub bodies: Vec<BodyState>,
+}
+
+/// A rigid body's state ([`splinerod_core::RigidBody`]; its mass properties come from
+/// the scene).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BodyState {
+    /// Centre of mass, m.
+    pub position: [Real; 3],
+    /// Orientation, a unit quaternion `[i, j, k, w]`.
+    pub orientation: [Real; 4],
+    /// Velocity, m/s.
+    pub velocity: [Real; 3],
+    /// Angular velocity (world frame), rad/s.
+    pub angular_velocity: [Real; 3],
 }
 
 fn arrays(vs: &[Vector3<Real>]) -> Vec<[Real; 3]> {
@@ -165,6 +181,17 @@ impl Simulation {
             integrator: integrator.into(),
             protected: self.adapter.as_ref().map(|a| a.protected().to_vec()),
             estimation: self.estimation.as_ref().map(|e| e.save().into()),
+            bodies: system
+                .bodies
+                .bodies
+                .iter()
+                .map(|b| BodyState {
+                    position: b.position.into(),
+                    orientation: b.orientation.coords.into(),
+                    velocity: b.velocity.into(),
+                    angular_velocity: b.angular_velocity.into(),
+                })
+                .collect(),
         }
     }
 
@@ -191,6 +218,7 @@ impl Simulation {
             grab.from = g.from.map(Into::into);
         }
         restore_grippers(system, &state.grippers)?;
+        restore_bodies(system, &state.bodies)?;
         if state.energies.len() != system.energies.len() {
             return Err(mismatch("energies of another scene"));
         }
@@ -297,6 +325,23 @@ fn restore_grippers(
             system.set_gripper_pose(k, pose)?;
         }
     }
+    Ok(())
+}
+
+/// Puts the saved states back on the bodies (and their pins on them).
+fn restore_bodies(system: &mut crate::RodSystem, saved: &[BodyState]) -> Result<(), Error> {
+    if saved.len() != system.bodies.bodies.len() {
+        return Err(mismatch("bodies of another scene"));
+    }
+    for (b, s) in system.bodies.bodies.iter_mut().zip(saved) {
+        b.position = s.position.into();
+        let q = nalgebra::Quaternion::from(nalgebra::Vector4::from(s.orientation));
+        b.orientation = nalgebra::UnitQuaternion::new_normalize(q);
+        b.velocity = s.velocity.into();
+        b.angular_velocity = s.angular_velocity.into();
+        b.check()?;
+    }
+    system.follow_bodies();
     Ok(())
 }
 

@@ -57,6 +57,8 @@ pub struct Simulation {
     saved_substep: SubstepMemory,
     interactions: Vec<Real>,
     pub(crate) saved: (Vec<nalgebra::Vector3<Real>>, Vec<nalgebra::Vector3<Real>>),
+    /// The rigid bodies before the last integration.
+    saved_bodies: Vec<splinerod_core::RigidBody>,
 }
 
 impl Simulation {
@@ -77,6 +79,7 @@ impl Simulation {
             saved_substep: SubstepMemory::default(),
             interactions: Vec::new(),
             saved: (Vec::new(), Vec::new()),
+            saved_bodies: Vec::new(),
         }
     }
 
@@ -261,7 +264,10 @@ impl Simulation {
         self.saved.0.clone_from(&self.system.rod.positions);
         self.saved.1.clone_from(&self.system.rod.velocities);
         self.saved_substep = self.substep.memory();
-        self.integrate(dt).inspect_err(|_| self.restore())
+        self.saved_bodies.clone_from(&self.system.bodies.bodies);
+        let result = self.integrate(dt).inspect_err(|_| self.restore());
+        self.system.follow_bodies();
+        result
     }
 
     /// Puts back the state saved before the last integration.
@@ -271,6 +277,8 @@ impl Simulation {
         let rod = &mut self.system.rod;
         rod.positions.clone_from(&self.saved.0);
         rod.velocities.clone_from(&self.saved.1);
+        self.system.bodies.bodies.clone_from(&self.saved_bodies);
+        self.system.follow_bodies();
     }
 
     /// Whether the step just estimated must be recomputed on a finer basis: its error

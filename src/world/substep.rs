@@ -96,6 +96,7 @@ pub(crate) struct SubstepState {
     /// Start of the current sub-step (for a rejection by the time error test).
     saved_q: Vec<Vector3<Real>>,
     saved_v: Vec<Vector3<Real>>,
+    saved_bodies: Vec<splinerod_core::RigidBody>,
     /// The grabs' targets at the start of the sub-step.
     targets: Vec<Vector3<Real>>,
     /// The pins' positions at the start of the sub-step.
@@ -237,6 +238,8 @@ impl Simulation {
             let rod = &self.system.rod;
             self.substep.saved_q.clone_from(&rod.positions);
             self.substep.saved_v.clone_from(&rod.velocities);
+            let bodies = &self.system.bodies.bodies;
+            self.substep.saved_bodies.clone_from(bodies);
         }
         // Only stages with work are timed (a clock read costs as much as a small step's
         // bookkeeping); an idle stage stays at zero.
@@ -385,6 +388,10 @@ impl Simulation {
         if rod.len() == self.substep.saved_q.len() {
             rod.positions.copy_from_slice(&self.substep.saved_q);
             rod.velocities.copy_from_slice(&self.substep.saved_v);
+        }
+        let bodies = &mut self.system.bodies.bodies;
+        if bodies.len() == self.substep.saved_bodies.len() {
+            bodies.clone_from_slice(&self.substep.saved_bodies);
         }
         self.restore_targets();
         self.substep.streak = 0;

@@ -12,7 +12,8 @@
 //! the next step, solve or estimate refuses to run on it
 //! ([`crate::Error::KnotsChangedUnheard`]) instead of reading stale caches.
 
-use crate::world::gripper::{Gripper, Pose};
+use crate::world::bodies::Bodies;
+use crate::world::gripper::Gripper;
 use crate::world::path::Path;
 use crate::{Error, Grab};
 
@@ -35,7 +36,9 @@ pub struct PinDriver {
     pub path: Path,
 }
 use nalgebra::Vector3;
-use splinerod_core::{BlockBanded, Cancel, CoreError, HessianKind, KnotMap, Pin, Real, Rod};
+use splinerod_core::{
+    Attachment, BlockBanded, Cancel, CoreError, HessianKind, KnotMap, Pin, Real, RigidBody, Rod,
+};
 use splinerod_energies::{Energy, EnergySummary, PointForce};
 #[cfg(doc)]
 use splinerod_energies::{Interaction, Lifecycle, Summary};
@@ -60,6 +63,8 @@ pub struct RodSystem {
     /// Grippers holding exact clamps ([`crate::world::gripper`]), moved along their pose
     /// paths by [`RodSystem::drive`] or between steps by [`RodSystem::set_gripper_pose`].
     pub grippers: Vec<Gripper>,
+    /// Rigid bodies the pins hold ([`crate::world::bodies`]).
+    pub bodies: Bodies,
     /// The rod's topology epoch when the energies last heard of its knots.
     heard_epoch: u64,
     /// Every knot change so far, in order (checkpoints replay them).
@@ -86,6 +91,7 @@ impl RodSystem {
             drivers: Vec::new(),
             loads: Vec::new(),
             grippers: Vec::new(),
+            bodies: Bodies::default(),
             non_finite: std::sync::Mutex::new(None),
             cancel: Cancel::none(),
         }
@@ -160,39 +166,6 @@ impl RodSystem {
     pub fn with_gripper(mut self, gripper: Gripper) -> Self {
         self.grippers.push(gripper);
         self
-    }
-
-    /// Whether a gripper follows a pose path.
-    pub fn has_posed_grippers(&self) -> bool {
-        self.grippers.iter().any(|g| g.path.is_some())
-    }
-
-    /// Puts gripper `k` in `pose` (its pins and the energies measured against its
-    /// clamp frame), from the next step on; a gripper with a pose path is moved by it
-    /// again at the next step. An error naming `index` if there is no gripper `k`.
-    pub fn set_gripper_pose(&mut self, k: usize, pose: Pose) -> Result<(), Error> {
-        let count = self.grippers.len();
-        let Some(gripper) = self.grippers.get_mut(k) else {
-            let reason = format!("the system has {count} gripper(s)");
-            return Err(Error::field("index", k, reason));
-        };
-        gripper.apply(pose, &mut self.pins, &mut self.energies);
-        Ok(())
-    }
-
-    /// Moves every gripper with a pose path to its pose at time `t`.
-    pub fn drive_grippers(&mut self, t: Real) {
-        let Self {
-            grippers,
-            pins,
-            energies,
-            ..
-        } = self;
-        for g in grippers.iter_mut() {
-            if let Some(pose) = g.scheduled(t) {
-                g.apply(pose, pins, energies);
-            }
-        }
     }
 
     /// Whether anything in the system moves with time: driven pins, keyframed loads,
@@ -425,6 +398,15 @@ impl System for RodSystem {
     }
     fn pins(&self) -> &[Pin] {
         &self.pins
+    }
+    fn bodies(&self) -> &[RigidBody] {
+        &self.bodies.bodies
+    }
+    fn bodies_mut(&mut self) -> &mut [RigidBody] {
+        &mut self.bodies.bodies
+    }
+    fn attachments(&self) -> &[Attachment] {
+        &self.bodies.attachments
     }
     fn potential_energy(&self) -> Real {
         let total: Real = self.acting().map(|e| e.energy(&self.rod)).sum();

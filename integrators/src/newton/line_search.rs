@@ -46,21 +46,23 @@ pub(super) fn line_search(
     let phi0 = match (search, known) {
         (false, _) => 0.0,
         (true, Some(phi)) => phi,
-        (true, None) => problem.merit(system),
+        (true, None) => problem.merit(system) + ws.coupling.merit(),
     };
     // An admissible iterate stays admissible (System::admissible).
     let guard = search && system.admissible();
     ws.base.copy_from_slice(x);
+    ws.coupling.save();
     let mut t: Real = 1.0;
     loop {
         for ((xi, b), d) in x.iter_mut().zip(&ws.base).zip(&ws.dx) {
             *xi = b + d * t;
         }
+        ws.coupling.stage(t);
         problem.apply(system.rod_mut(), x);
         if !search {
             return Ok((t, None));
         }
-        let phi = problem.merit(system);
+        let phi = problem.merit(system) + ws.coupling.merit();
         let admissible = !guard || system.admissible();
         let armijo = admissible && phi <= phi0 + 1e-4 * t * slope;
         let noise = admissible && (phi - phi0).abs() <= 1e-14 * phi0.abs();
@@ -72,6 +74,7 @@ pub(super) fn line_search(
                 for (xi, b) in x.iter_mut().zip(&ws.base) {
                     *xi = *b;
                 }
+                ws.coupling.stage(0.0);
                 problem.apply(system.rod_mut(), x);
                 return Ok((t, Some(phi0)));
             }

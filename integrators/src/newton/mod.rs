@@ -18,7 +18,9 @@
 //! [`ConvergenceTracker`]'s, the type each lane of the batched solver
 //! ([`crate::lane_euler`]) owns too; [`crate::convergence`] states the rules and why.
 
+mod bodies;
 mod carried;
+mod curvature;
 mod line_search;
 mod tangent;
 
@@ -28,6 +30,9 @@ use crate::kkt::Constraints;
 use crate::linear::{LinearSolver, LinearSolverKind};
 use crate::remainder::{RemainderCg, MOTION_FRACTION, REMAINDER_FLOOR};
 use crate::{IntegratorError, StepStats, System};
+pub use bodies::BodyForm;
+use bodies::{couple_bodies, set_targets};
+pub(crate) use curvature::negative_curvature;
 use line_search::{line_search, Trial};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -153,6 +158,12 @@ pub trait NewtonProblem {
         0.0
     }
 
+    /// How the problem moves rigid bodies ([`crate::System::bodies`]); `None` (the
+    /// default): it cannot, and a system with bodies is refused.
+    fn body_form(&self) -> Option<BodyForm> {
+        None
+    }
+
     /// Called after each step with the accepted step length `t ∈ (0, 1]`.
     fn on_step(&mut self, step_length: Real) {
         let _ = step_length;
@@ -186,6 +197,8 @@ pub struct NewtonWorkspace {
     /// A tangent solve's exact and definite matrices when the exact one was indefinite
     /// ([`carried`]): their difference rides with the remainder's correction.
     carried: carried::Carried,
+    /// Rigid bodies in the solve ([`bodies`]).
+    coupling: bodies::Coupling,
 }
 
 impl NewtonWorkspace {
@@ -199,6 +212,11 @@ impl NewtonWorkspace {
     pub(crate) fn set_multipliers(&mut self, mu: impl Iterator<Item = Vector3<Real>>) {
         self.multipliers.clear();
         self.multipliers.extend(mu);
+    }
+
+    /// Writes the last solve's rigid bodies into the system (nothing without bodies).
+    pub(crate) fn write_bodies(&self, system: &mut dyn System) {
+        self.coupling.write_back(system);
     }
 
     /// The Newton matrix buffer (scratch between solves).
@@ -234,9 +252,14 @@ pub fn solve(
     let n = x.len();
     ws.solver_kind(params.linear_solver, system);
     ws.resize(n, system.pins().len());
-    ws.constraints.setup(system.rod(), system.pins())?;
-    for (p, pin) in system.pins().iter().enumerate() {
-        ws.constraints.targets[p] = problem.target(&ws.constraints.rows()[p], pin);
+    let coupled = ws.coupling.begin(system, problem.body_form())?;
+    ws.constraints.set_held(ws.coupling.held_pins());
+    if coupled {
+        ws.multipliers
+            .iter_mut()
+            .for_each(|m| *m = Vector3::zeros());
+    } else {
+        set_targets(problem, system.rod(), system.pins(), ws)?;
     }
     let mut tracker = ConvergenceTracker::new(params, system.rod().material().rest_length);
     let tolerance = tracker.tolerance();
@@ -253,6 +276,9 @@ pub fn solve(
         }
         stats.newton_iterations = tracker.iterations();
         problem.residual_and_matrix(system, &mut ws.r, ws.solver.matrix_mut());
+        if coupled {
+            couple_bodies(problem, system.rod(), ws)?;
+        }
         let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;
         let descends = slope < 0.0;
         if ws.solver.is_indefinite() && !descends && problem.on_not_positive_definite() {
@@ -260,9 +286,11 @@ pub fn solve(
             slope = newton_direction(problem, system, x, ws, false, &mut stats)?;
         }
         let mut full = ws.dx.iter().map(|v| v.amax()).fold(0.0, Real::max) * length;
+        full = full.max(ws.coupling.motion());
         tracker.check_divergence(full)?;
         if let Some(cap) = params.max_step.filter(|&cap| full > cap) {
             ws.dx.iter_mut().for_each(|d| *d *= cap / full);
+            ws.coupling.scale_step(cap / full);
             full = cap;
         }
         let step = Trial {
@@ -372,7 +400,17 @@ fn solve_factored(
             what: "Newton step",
         });
     }
-    Ok(ws.base.iter().zip(&ws.dx).map(|(r, d)| r.dot(d)).sum())
+    let bodies = match ws.coupling.active() {
+        true => ws.coupling.direction(&ws.multipliers),
+        false => 0.0,
+    };
+    Ok(ws
+        .base
+        .iter()
+        .zip(&ws.dx)
+        .map(|(r, d)| r.dot(d))
+        .sum::<Real>()
+        + bodies)
 }
 
 /// Assembles the problem's matrix into the solver's (unless `assembled`: it is there)
@@ -457,38 +495,4 @@ fn indefinite_fallback(
     } else {
         Fallback::Fail
     })
-}
-
-/// Whether the applied state is a stable stationary point: assembles the problem's
-/// matrix (with the pins as in a solve) and factorises it. `None` if it is positive
-/// definite (or too singular to tell); otherwise the curvature and, in `d`, a direction
-/// of negative curvature (zero at the control points the pins hold).
-pub(crate) fn negative_curvature(
-    problem: &mut dyn NewtonProblem,
-    system: &dyn System,
-    ws: &mut NewtonWorkspace,
-    d: &mut Vec<Vector3<Real>>,
-) -> Result<Option<Real>, IntegratorError> {
-    let n = system.rod().len();
-    ws.resize(n, system.pins().len());
-    ws.solver.periodic = system.rod().basis().periodic_count();
-    ws.constraints.setup(system.rod(), system.pins())?;
-    assemble(problem, system, ws, false);
-    let epoch = system.rod().topology_epoch();
-    if ws.solver.factor_assembled(epoch).is_ok() {
-        return Ok(None);
-    }
-    if !ws.solver.matrix_intact() {
-        assemble(problem, system, ws, false);
-    }
-    let far = ws.solver.matrix().is_none_or(|m| m.has_far_blocks());
-    if far || ws.solver.factor_indefinite_assembled().is_err() {
-        return Ok(None);
-    }
-    d.resize(n, Vector3::zeros());
-    let curvature = ws.solver.negative_curvature(d);
-    for k in ws.constraints.points.control_points() {
-        d[k] = Vector3::zeros();
-    }
-    Ok(curvature)
 }

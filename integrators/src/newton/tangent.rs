@@ -49,6 +49,8 @@ pub fn tangents(
 ) -> Result<StepStats, IntegratorError> {
     let n = system.rod().len();
     ws.resize(n, system.pins().len());
+    ws.coupling.clear();
+    ws.constraints.set_held(std::iter::empty());
     ws.constraints.setup(system.rod(), system.pins())?;
     let mut stats = StepStats::default();
     factor_matrix(problem, system, ws, false)?;

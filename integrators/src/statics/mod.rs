@@ -144,6 +144,7 @@ impl StaticSolver {
             system.rod().positions.clone(),
             system.rod().velocities.clone(),
         );
+        let bodies = system.bodies().to_vec();
         self.continuation_steps = 0;
         let mut total = StepStats::default();
         let result = self
@@ -153,6 +154,7 @@ impl StaticSolver {
         if result.is_err() {
             let rod = system.rod_mut();
             (rod.positions, rod.velocities) = saved;
+            system.bodies_mut().clone_from_slice(&bodies);
             // The multipliers of an abandoned iterate are no pin forces of that state.
             self.workspace.set_multipliers(std::iter::empty());
         }
@@ -166,16 +168,19 @@ impl StaticSolver {
         total: &mut StepStats,
     ) -> Result<(), IntegratorError> {
         let start = system.rod().positions.clone();
+        let bodies = system.bodies().to_vec();
         let first = self.newton(system, self.params.max_iterations, total);
         let recoverable = first.as_ref().map_or_else(|e| e.is_recoverable(), |ok| !ok);
         match first {
             Ok(true) => Ok(()),
             _ if recoverable && self.params.max_continuation_steps > 0 => {
                 system.rod_mut().positions.clone_from(&start);
+                system.bodies_mut().clone_from_slice(&bodies);
                 if self.soften_and_stiffen(system, total)? {
                     return Ok(());
                 }
                 system.rod_mut().positions.clone_from(&start);
+                system.bodies_mut().clone_from_slice(&bodies);
                 self.continuation(system, total)
             }
             Ok(false) => Err(IntegratorError::NotConverged {
@@ -288,6 +293,7 @@ impl StaticSolver {
                 regularization: 0.0,
                 kind: HessianKind::Exact,
                 rho: 0.0,
+                rate: 0.0,
             };
             let ws = &mut self.workspace;
             if newton::negative_curvature(&mut check, system, ws, &mut direction)?.is_none() {
@@ -344,6 +350,7 @@ impl StaticSolver {
             regularization: 0.0,
             kind: HessianKind::Exact,
             rho: 0.0,
+            rate: 0.0,
         };
         let forces = self.workspace.multipliers().to_vec();
         self.workspace
@@ -400,6 +407,7 @@ impl StaticSolver {
             regularization: 1e-3,
             kind: HessianKind::Definite,
             rho: 0.0,
+            rate: 0.0,
         };
         let params = NewtonParams {
             max_step: Some(STEP_LIMIT * system.rod().material().rest_length),
@@ -409,6 +417,7 @@ impl StaticSolver {
         let stats = newton::solve(&mut problem, system, &mut self.x, &params, ws);
         if let Ok(s) = &stats {
             add_counts(total, s);
+            ws.write_bodies(system);
         }
         Ok(stats?.converged)
     }
@@ -438,6 +447,7 @@ impl StaticSolver {
         };
         let mut point = system.rod().positions.clone();
         self.stepper.definite_only = true;
+        self.stepper.bodies = true;
         for _ in 0..steps {
             system.rod_mut().velocities.fill(Vector3::zeros());
             self.stepper.begin(system, h)?;

@@ -3,7 +3,7 @@
 //! module docs (`statics/mod.rs`): \\(A = K + \varepsilon M\\), ε ×4 after a cut step,
 //! ÷10 after a full one, the exact Hessian once ε ≤ 1e-6.
 
-use crate::newton::{NewtonParams, NewtonProblem, NewtonWorkspace};
+use crate::newton::{BodyForm, NewtonParams, NewtonProblem, NewtonWorkspace};
 use crate::statics::StaticParams;
 use crate::{StepStats, System};
 use nalgebra::Vector3;
@@ -63,6 +63,8 @@ pub(super) struct StaticProblem {
     pub(super) kind: HessianKind,
     /// Augmented Lagrangian weight: the largest diagonal entry of `K` (a stiffness scale).
     pub(super) rho: Real,
+    /// max K / max M of the last matrix (1/s²): the regularisation's scale.
+    pub(super) rate: Real,
 }
 
 impl NewtonProblem for StaticProblem {
@@ -85,6 +87,7 @@ impl NewtonProblem for StaticProblem {
         let (k, m) = diagonal_scales(rod, a);
         let k = if k > 0.0 { k } else { m };
         self.rho = k;
+        self.rate = k / m;
         if self.regularization > 0.0 {
             a.add_scaled_scalar(self.regularization * k / m, rod.mass_matrix());
         }
@@ -108,6 +111,15 @@ impl NewtonProblem for StaticProblem {
 
     fn augmentation(&self) -> Real {
         self.rho
+    }
+
+    /// Bodies take the rod's regularisation on their mass and inertia, at least 1e-10
+    /// of the scale: a direction only gravity and the pins act in (a welded body's roll
+    /// about a rod without twist) is neutral, and the floor keeps its matrix definite.
+    fn body_form(&self) -> Option<BodyForm> {
+        Some(BodyForm::Static {
+            regularization: self.regularization.max(1e-10) * self.rate,
+        })
     }
 
     fn on_not_positive_definite(&mut self) -> bool {
