@@ -203,6 +203,28 @@ def swing(p, stop_at=math.pi / 2):
     return np.array(times), np.array(angles), np.array(chords)
 
 
+def native_swing(p):
+    """The same pendulum with the bob as a splinerod rigid body (`[[bodies]]`, welded
+    to the cable's clamp, solved in the cable's Newton system): the times and swing
+    angles of its recorded centre of mass."""
+    scene = p.cable_scene()
+    scene["bodies"] = [
+        {
+            "name": "bob",
+            "mass": p.mass,
+            "inertia": [float(i) for i in p.inertia()],
+            "position": [float(x) for x in p.centre_start()],
+            "orientation": [float(x) for x in p.orientation_start()],
+        }
+    ]
+    scene["pins"][1]["body"] = "bob"
+    sim = splinerod.Scene(scene).simulation()
+    sim.run()
+    track = sim.result()["bodies"][0]
+    centres = np.array(track["position"])
+    return np.array(track["t"]), np.arctan2(centres[:, 0], -centres[:, 2])
+
+
 def period(times, angles):
     """The mean period of an oscillation about zero: twice the mean spacing of its zero
     crossings (linear interpolation), from the first crossing to the last."""
