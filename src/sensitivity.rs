@@ -165,6 +165,7 @@ pub(crate) fn largest(d: &[[Real; 3]]) -> Real {
 /// The equilibrium of the static `scene` and its sensitivities to the parameters
 /// `paths` (see the module docs).
 pub fn static_sensitivities(scene: &Scene, paths: &[&str]) -> Result<StaticSensitivities, Error> {
+    scene.without_bodies("sensitivities")?;
     if scene.solver.method != crate::scene::Method::Static {
         let reason = "a static solve's sensitivities need method = \"static\" \
                       (a run's are dynamic_sensitivities')";

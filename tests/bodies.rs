@@ -274,3 +274,49 @@ fn bad_bodies_are_refused_naming_the_field() {
         assert_field(&line, field);
     }
 }
+
+#[test]
+fn sensitivities_of_a_scene_with_bodies_are_refused_naming_them() {
+    let out = std::env::temp_dir().join(format!("splinerod-bodies-{}.json", std::process::id()));
+    let out = out.to_str().expect("a UTF-8 path");
+    let args = [
+        "sensitivities",
+        "scenes/body_pendulum.toml",
+        "--params",
+        "rod.bending_stiffness",
+        "--json",
+        out,
+    ];
+    let line = crate::common::cli::refused(&args);
+    assert_field(&line, "bodies[0]");
+}
+
+#[test]
+fn a_load_on_a_body_acts_at_its_centre_of_mass() {
+    // The welded cantilever with 0.2 N more on the block: the beam under the tip force
+    // Mg + F and the moment (Mg + F)·d.
+    let (l, mu, ei, g, mass, d, extra) = (1.5_f64, 0.01, 1e3, 9.81, 0.05, 0.2, 0.2);
+    let loaded = format!(
+        "{}\n[[loads]]\nbody = \"block\"\nforce = [0.0, -{extra}, 0.0]\n",
+        cantilever(mass, d, 12, 1)
+    );
+    let result = run(&Scene::from_toml(&loaded).expect("scene")).expect("run");
+    let f = mass * g + extra;
+    let deflection =
+        f * l.powi(3) / (3.0 * ei) + f * d * l * l / (2.0 * ei) + mu * g * l.powi(4) / (8.0 * ei);
+    let tip = result.samples.positions.last().expect("tip");
+    let error = -tip[1] / deflection - 1.0;
+    println!(
+        "loaded block: deflection {:.9e} (beam {deflection:.9e}, {error:.1e})",
+        -tip[1]
+    );
+    assert!(error.abs() < 1e-4, "{error}");
+    let force = result.bodies[0].force.last().expect("force");
+    assert!((force[1] - f).abs() < 1e-9 * f, "{force:?}");
+    // A body's load takes no material point.
+    let at = loaded.replace(
+        "body = \"block\"\nforce",
+        "body = \"block\"\nat = 0.5\nforce",
+    );
+    assert_field(&rejected(&at), "loads[0].body");
+}

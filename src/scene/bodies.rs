@@ -125,6 +125,18 @@ impl Scene {
                 return Err(Error::field(field, format!("{name:?}"), reason));
             }
         }
+        for (i, load) in self.loads.iter().enumerate() {
+            let Some(name) = &load.body else { continue };
+            let field = format!("loads[{i}].body");
+            if !self.bodies.iter().any(|b| &b.name == name) {
+                let reason = "names no body of [[bodies]]";
+                return Err(Error::field(field, format!("{name:?}"), reason));
+            }
+            if load.at.is_some() || load.rod.is_some() {
+                let reason = "a body's load acts at its centre of mass: give no `at` or `rod`";
+                return Err(Error::field(field, format!("{name:?}"), reason));
+            }
+        }
         if self.bodies.is_empty() {
             return Ok(());
         }
@@ -145,6 +157,18 @@ impl Scene {
         Ok(())
     }
 
+    /// An error naming `bodies` if the scene has any: for what does not carry them yet
+    /// (`what`, e.g. the sensitivities).
+    pub(crate) fn without_bodies(&self, what: &str) -> Result<(), Error> {
+        match self.bodies.first() {
+            None => Ok(()),
+            Some(b) => {
+                let reason = format!("{what} do not carry rigid bodies yet");
+                Err(Error::field("bodies[0]", format!("{:?}", b.name), reason))
+            }
+        }
+    }
+
     /// `system` with the scene's bodies, each holding the pins that name it (a clamp's
     /// tangent pin too); built after the pins (their indices are the file's).
     pub(crate) fn add_bodies(&self, mut system: RodSystem) -> Result<RodSystem, Error> {
@@ -152,6 +176,17 @@ impl Scene {
         for (i, spec) in self.bodies.iter().enumerate() {
             system.add_body(&spec.name, spec.body(i, g)?)?;
         }
+        system.bodies.gravity = g;
+        for (i, load) in self.loads.iter().enumerate() {
+            let Some(name) = &load.body else { continue };
+            let body = self.bodies.iter().position(|b| &b.name == name);
+            let body =
+                body.ok_or_else(|| Error::field(format!("loads[{i}].body"), name, "unknown body"))?;
+            let (force, path) = load.force_and_path(i)?;
+            let load = crate::world::bodies::BodyLoad { body, force, path };
+            system.bodies.loads.push(load);
+        }
+        system.drive_bodies(0.0);
         for (i, pin) in self.pins.iter().enumerate() {
             let Some(name) = &pin.body else { continue };
             let body = self.bodies.iter().position(|b| &b.name == name);

@@ -15,8 +15,11 @@ pub struct LoadSpec {
     /// The rod (its `name` in `[[rods]]`) this acts on; needed when the scene has
     /// several rods.
     pub rod: Option<String>,
-    /// Material coordinate, fraction of the rest length in `[0, 1]`.
-    pub at: f64,
+    /// Material coordinate, fraction of the rest length in `[0, 1]` (required unless
+    /// `body` is given).
+    pub at: Option<f64>,
+    /// A `[[bodies]]` entry the force acts on, at its centre of mass (instead of `at`).
+    pub body: Option<String>,
     /// A constant force, N.
     pub force: Option<[f64; 3]>,
     /// Keyframes `[t, Fx, Fy, Fz]` (s, N) of a force changing in time.
@@ -32,7 +35,28 @@ impl Scene {
         let l = self.rod.rest_length;
         let mut loads = Vec::with_capacity(self.loads.len());
         for (i, spec) in self.loads.iter().enumerate() {
-            fraction(&format!("loads[{i}].at"), spec.at)?;
+            let (force, path) = spec.force_and_path(i)?;
+            if spec.body.is_some() {
+                continue;
+            }
+            let field = format!("loads[{i}].at");
+            let at = spec.at.ok_or_else(|| {
+                let reason = "required: the loaded material point (or `body`)";
+                Error::field(&field, "missing", reason)
+            })?;
+            fraction(&field, at)?;
+            let force = PointForce::new(at * l, force)?;
+            loads.push(Load { force, path });
+        }
+        Ok(loads)
+    }
+}
+
+impl LoadSpec {
+    /// The force at t = 0 and the keyframed path, if any (errors name `loads[i]`).
+    pub(crate) fn force_and_path(&self, i: usize) -> Result<(Vector3<f64>, Option<Path>), Error> {
+        let spec = self;
+        {
             let (force, path) = match (&spec.force, &spec.path) {
                 (Some(f), None) => {
                     finite_vec(&format!("loads[{i}].force"), *f)?;
@@ -48,9 +72,7 @@ impl Scene {
                     return Err(Error::field(format!("loads[{i}].force"), "?", reason));
                 }
             };
-            let force = PointForce::new(spec.at * l, force)?;
-            loads.push(Load { force, path });
+            Ok((force, path))
         }
-        Ok(loads)
     }
 }

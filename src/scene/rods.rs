@@ -14,7 +14,7 @@
 //! of different radii keep their centre lines `r₁ + r₂` apart
 //! ([`splinerod_energies::Contact::with_segment_radii`]).
 
-use crate::scene::{RodSpec, Scene};
+use crate::scene::{LoadSpec, RodSpec, Scene};
 use crate::world::gripper::Gripper;
 use crate::{Error, PinDriver, RodSystem};
 use splinerod_core::{Cancel, Pin, Real, Rod};
@@ -123,10 +123,11 @@ impl Scene {
         let mut sub = self.clone();
         sub.rod = self.rods[k].clone();
         sub.rods.clear();
-        (sub.pins, origins.pins) = self.entries_of(k, "pins", &self.pins, |p| &p.rod)?;
-        (sub.grabs, origins.grabs) = self.entries_of(k, "grabs", &self.grabs, |g| &g.rod)?;
-        (sub.loads, origins.loads) = self.entries_of(k, "loads", &self.loads, |l| &l.rod)?;
-        (sub.cuts, origins.cuts) = self.entries_of(k, "cuts", &self.cuts, |c| &c.rod)?;
+        (sub.pins, origins.pins) = self.entries_of(k, "pins", &self.pins, |p| Some(&p.rod))?;
+        (sub.grabs, origins.grabs) = self.entries_of(k, "grabs", &self.grabs, |g| Some(&g.rod))?;
+        // A body's load names no rod (`add_bodies` takes it).
+        (sub.loads, origins.loads) = self.entries_of(k, "loads", &self.loads, rod_of_load)?;
+        (sub.cuts, origins.cuts) = self.entries_of(k, "cuts", &self.cuts, |c| Some(&c.rod))?;
         // Probes may name any rod: the whole scene checks them (`resolve_rods`).
         sub.output.probes.clear();
         Ok((sub, origins))
@@ -139,12 +140,13 @@ impl Scene {
         k: usize,
         label: &str,
         list: &[T],
-        rod: impl Fn(&T) -> &Option<String>,
+        rod: impl Fn(&T) -> Option<&Option<String>>,
     ) -> Result<(Vec<T>, Vec<usize>), Error> {
         let (mut mine, mut origins) = (Vec::new(), Vec::new());
         for (i, entry) in list.iter().enumerate() {
             let field = format!("{label}[{i}].rod");
-            if self.rod_index(&field, rod(entry).as_deref())? == k {
+            let Some(name) = rod(entry) else { continue };
+            if self.rod_index(&field, name.as_deref())? == k {
                 mine.push(entry.clone());
                 origins.push(i);
             }
@@ -327,6 +329,11 @@ impl Scene {
         }
         self.add_bodies(system)
     }
+}
+
+/// The rod a load names; `None` for a body's load (no rod's).
+fn rod_of_load(load: &LoadSpec) -> Option<&Option<String>> {
+    load.body.is_none().then_some(&load.rod)
 }
 
 /// `e` with the field paths of rod `k`'s scene renamed to the file's: `rod.x` to

@@ -251,6 +251,7 @@ fn one_step(
 
 /// An error naming the first field of `scene` whose run cannot be differentiated.
 fn refuse(scene: &Scene) -> Result<(), Error> {
+    scene.without_bodies("sensitivities")?;
     let solver = &scene.solver;
     if !matches!(solver.method, Method::ImplicitEuler | Method::Bdf2) {
         let reason = "sensitivities of runs are built for implicit-euler and bdf2 \

@@ -12,6 +12,7 @@
 //! mass `x`, with \\(C_p\\) the held point (the control point next to the clamp for a
 //! tangent pin).
 
+use crate::world::path::Path;
 use crate::RodSystem;
 use nalgebra::Vector3;
 use splinerod_core::{Attachment, CoreError, Real, RigidBody};
@@ -25,6 +26,21 @@ pub struct Bodies {
     pub names: Vec<String>,
     /// The pins they hold.
     pub attachments: Vec<Attachment>,
+    /// Gravity, m/s² (each body's weight at its centre of mass).
+    pub gravity: Vector3<Real>,
+    /// Forces at the bodies' centres of mass (`[[loads]] body`).
+    pub loads: Vec<BodyLoad>,
+}
+
+/// A force on a body at its centre of mass, constant or keyframed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyLoad {
+    /// Index of the body.
+    pub body: usize,
+    /// The force when constant, N.
+    pub force: Vector3<Real>,
+    /// Keyframes of the force (`[t, Fx, Fy, Fz]` as positions of a [`Path`]).
+    pub path: Option<Path>,
 }
 
 impl RodSystem {
@@ -54,6 +70,22 @@ impl RodSystem {
             axis: axis.map(|a| b.orientation.inverse() * a),
         });
         Ok(())
+    }
+
+    /// Sets each body's external force for a step ending at `t`: its weight plus its
+    /// loads at `t`.
+    pub fn drive_bodies(&mut self, t: Real) {
+        let Bodies {
+            bodies,
+            gravity,
+            loads,
+            ..
+        } = &mut self.bodies;
+        for (k, b) in bodies.iter_mut().enumerate() {
+            let on = loads.iter().filter(|l| l.body == k);
+            let applied = on.map(|l| l.path.as_ref().map_or(l.force, |p| p.at(t)));
+            b.force = *gravity * b.mass + applied.sum::<Vector3<Real>>();
+        }
     }
 
     /// Moves the held pins to the bodies' points (after a step or a state restored).

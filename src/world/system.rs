@@ -176,6 +176,7 @@ impl RodSystem {
             || self.has_posed_grippers()
             || !self.grabs.is_empty()
             || self.loads.iter().any(|l| l.path.is_some())
+            || self.bodies.loads.iter().any(|l| l.path.is_some())
             || self.energies.iter().any(|e| {
                 let lifecycle = e.capabilities().lifecycle;
                 lifecycle.is_some_and(|l| l.time_dependent())
@@ -201,6 +202,9 @@ impl RodSystem {
             }
         }
         self.drive_grippers(t);
+        if !self.bodies.loads.is_empty() {
+            self.drive_bodies(t);
+        }
     }
 
     /// The springs of the grabs active at [`time`](Self::time).
