@@ -262,6 +262,16 @@ fn bad_bodies_are_refused_naming_the_field() {
         ),
         ("name = \"bob\"", "name = \"\"", "bodies[0].name"),
         (
+            "mass = 2.0",
+            "mass = 2.0\nspheres = [[0.0, 0.0, 0.0, 0.0]]",
+            "bodies[0].spheres[0][3]",
+        ),
+        (
+            "mass = 2.0",
+            "mass = 2.0\ncapsules = [[0.0, nan, 0.0, 0.1, 0.0, 0.0, 0.1]]",
+            "bodies[0].capsules[0]",
+        ),
+        (
             "clamp = true\n",
             "clamp = true\npath = [[0.0, 0.05, -1.0, 0.0]]\n",
             "pins[1].body",
@@ -319,4 +329,93 @@ fn a_load_on_a_body_acts_at_its_centre_of_mass() {
         "body = \"block\"\nat = 0.5\nforce",
     );
     assert_field(&rejected(&at), "loads[0].body");
+}
+
+/// A body with `shapes` (TOML lines) dropped from `height` onto the floor at y = 0 beside
+/// a cable pinned at both ends (which it does not touch); implicit Euler for 3 s.
+fn dropped(shapes: &str, height: f64, orientation: [f64; 3]) -> splinerod::RunResult {
+    run(&Scene::from_toml(&dropped_text(shapes, height, orientation)).expect("scene")).expect("run")
+}
+
+/// The scene of [`dropped`].
+fn dropped_text(shapes: &str, height: f64, orientation: [f64; 3]) -> String {
+    format!(
+        r#"
+[rod]
+rest_length = 1.0
+linear_density = 0.01
+stretch_stiffness = 1e4
+radius = 0.005
+control_points = 8
+start = [0.0, 2.0, 0.0]
+end = [1.0, 2.0, 0.0]
+
+[[pins]]
+at = 0.0
+
+[[pins]]
+at = 1.0
+
+[[bodies]]
+name = "ball"
+mass = 1.0
+inertia = [0.004, 0.016, 0.016]
+position = [3.0, {height}, 0.0]
+orientation = {orientation:?}
+{shapes}
+
+[contact]
+floor = 0.0
+
+[world]
+gravity = [0.0, -9.81, 0.0]
+
+[solver]
+method = "implicit-euler"
+dt = 0.002
+duration = 3.0
+"#
+    )
+}
+
+#[test]
+fn bodies_come_to_rest_on_the_floor_on_their_contact_shapes() {
+    // A sphere of radius 0.1 at the centre of mass: at rest its weight sinks it by 1 %
+    // of its radius (the penalty's stiffness), so the centre rests at 0.099 m.
+    let ball = dropped("spheres = [[0.0, 0.0, 0.0, 0.1]]", 0.3, [0.0; 3]);
+    let track = &ball.bodies[0];
+    let (y, v) = (
+        track.position.last().unwrap()[1],
+        track.velocity.last().unwrap(),
+    );
+    println!("sphere: rests at {y:.9} m, velocity {v:?}");
+    assert!(
+        (y - 0.099).abs() < 1e-6 && v.iter().all(|c| c.abs() < 1e-5),
+        "{y} {v:?}"
+    );
+    // A capsule dropped tilted lands on one end and settles flat on both: each end
+    // carries half the weight, sinking by 0.5 % of the radius.
+    let capsule = dropped(
+        "capsules = [[-0.2, 0.0, 0.0, 0.2, 0.0, 0.0, 0.05]]",
+        0.3,
+        [0.0, 0.0, 0.2],
+    );
+    let track = &capsule.bodies[0];
+    let (y, turn) = (
+        track.position.last().unwrap()[1],
+        track.orientation.last().unwrap(),
+    );
+    let v = track.velocity.last().unwrap();
+    println!("capsule: rests at {y:.9} m, orientation {turn:?}, velocity {v:?}");
+    assert!((y - 0.04975).abs() < 1e-6, "{y}");
+    assert!(turn.iter().all(|c| c.abs() < 1e-6), "{turn:?}");
+    // It fell straight down: no sideways force from a frictionless floor.
+    assert!((track.position.last().unwrap()[0] - 3.0).abs() < 1e-9);
+    // A static solve finds the same rest, from a start 1 cm up.
+    let text = dropped_text("spheres = [[0.0, 0.0, 0.0, 0.1]]", 0.11, [0.0; 3])
+        .replace("method = \"implicit-euler\"", "method = \"static\"");
+    let result = run(&Scene::from_toml(&text).expect("scene")).expect("static");
+    let y = result.bodies[0].position.last().unwrap()[1];
+    println!("sphere, static: rests at {y:.12} m");
+    assert!((y - 0.099).abs() < 1e-9, "{y}");
 }

@@ -287,6 +287,8 @@ impl Stepper {
         self.base_q.copy_from_slice(&rod.positions);
         self.base_v.copy_from_slice(&rod.velocities);
         self.x.copy_from_slice(&rod.velocities);
+        self.bodies0.clear();
+        self.bodies0.extend_from_slice(system.bodies());
         Ok(())
     }
 

@@ -62,7 +62,7 @@ pub use midpoint::ImplicitMidpoint;
 pub use newton::NewtonParams;
 pub use statics::{StaticParams, StaticSolver, CONSTRAINT_TOLERANCE, MAX_MULTIPLIER_UPDATES};
 
-use nalgebra::Vector3;
+use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
 use splinerod_core::{
     Attachment, BlockBanded, HessianKind, Pin, Real, RigidBody, Rod, SavedState, StateReader,
 };
@@ -159,6 +159,20 @@ pub trait System: Send + Sync {
     /// Which pins the bodies hold, and where. Default: none.
     fn attachments(&self) -> &[Attachment] {
         &[]
+    }
+    /// The potential of body `body`'s own forces that depend on its pose `(x, r)`
+    /// (contact of its shapes with the floor and obstacles), J; adds its gradient and a
+    /// positive semi-definite Hessian with respect to a translation and a rotation
+    /// (`r ← exp([δθ]×) r`) to `grad` and `hess`. Default: none.
+    fn add_body_potential(
+        &self,
+        body: usize,
+        pose: (&Vector3<Real>, &UnitQuaternion<Real>),
+        grad: &mut Vector6<Real>,
+        hess: &mut Matrix6<Real>,
+    ) -> Real {
+        let _ = (body, pose, grad, hess);
+        0.0
     }
 }
 

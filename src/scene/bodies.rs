@@ -4,10 +4,12 @@
 //! `pins[i].body`.
 
 use crate::scene::{finite_vec, positive, Scene};
+use crate::world::body_contact::BodyShape;
 use crate::{Error, RodSystem};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use splinerod_core::RigidBody;
+use splinerod_energies::Obstacle;
 
 /// `[[bodies]]`: one rigid body.
 #[derive(Debug, Clone, Deserialize)]
@@ -32,6 +34,14 @@ pub struct BodySpec {
     /// Angular velocity at the start (world frame), rad/s. Default zero.
     #[serde(default)]
     pub angular_velocity: [f64; 3],
+    /// Contact spheres `[x, y, z, r]` (centre in the body frame from the centre of
+    /// mass, radius), resting on the floor and the obstacles. Default none.
+    #[serde(default)]
+    pub spheres: Vec<[f64; 4]>,
+    /// Contact capsules `[ax, ay, az, bx, by, bz, r]` (axis ends in the body frame,
+    /// radius). Default none.
+    #[serde(default)]
+    pub capsules: Vec<[f64; 7]>,
 }
 
 /// An inertia: principal moments or a whole tensor.
@@ -74,6 +84,17 @@ impl BodySpec {
             ("angular_velocity", self.angular_velocity),
         ] {
             finite_vec(&field(name), v)?;
+        }
+        for (j, s) in self.spheres.iter().enumerate() {
+            let name = field(&format!("spheres[{j}]"));
+            finite_vec(&name, [s[0], s[1], s[2]])?;
+            positive(&format!("{name}[3]"), s[3])?;
+        }
+        for (j, c) in self.capsules.iter().enumerate() {
+            let name = field(&format!("capsules[{j}]"));
+            finite_vec(&name, [c[0], c[1], c[2]])?;
+            finite_vec(&name, [c[3], c[4], c[5]])?;
+            positive(&format!("{name}[6]"), c[6])?;
         }
         let orientation = UnitQuaternion::new(Vector3::from(self.orientation));
         let position = Vector3::from(self.position);
@@ -157,6 +178,65 @@ impl Scene {
         Ok(())
     }
 
+    /// The bodies' contact shapes, the floor and the obstacles they meet, and their
+    /// stiffnesses ([`crate::world::body_contact`]).
+    fn add_body_shapes(&self, system: &mut RodSystem) -> Result<(), Error> {
+        let contact = &mut system.bodies.contact;
+        for (k, spec) in self.bodies.iter().enumerate() {
+            for s in &spec.spheres {
+                let a = Vector3::new(s[0], s[1], s[2]);
+                contact.shapes.push(BodyShape {
+                    body: k,
+                    a,
+                    b: a,
+                    radius: s[3],
+                });
+            }
+            for c in &spec.capsules {
+                let (a, b) = (
+                    Vector3::new(c[0], c[1], c[2]),
+                    Vector3::new(c[3], c[4], c[5]),
+                );
+                contact.shapes.push(BodyShape {
+                    body: k,
+                    a,
+                    b,
+                    radius: c[6],
+                });
+            }
+        }
+        if contact.shapes.is_empty() {
+            return Ok(());
+        }
+        let floor = self
+            .contact
+            .as_ref()
+            .filter(|c| c.enabled)
+            .and_then(|c| c.floor);
+        if let Some(h) = floor {
+            let plane = Obstacle::Plane {
+                point: Vector3::new(0.0, h, 0.0),
+                normal: Vector3::y(),
+            };
+            contact.surfaces.push(plane);
+        }
+        for (i, spec) in self.obstacles.iter().enumerate() {
+            if spec.motion().0.is_some() {
+                let reason = "bodies' contact shapes meet static obstacles only (yet)";
+                return Err(Error::field(
+                    format!("obstacles[{i}].path"),
+                    "given",
+                    reason,
+                ));
+            }
+            contact.surfaces.push(spec.obstacle());
+        }
+        let masses: Vec<f64> = system.bodies.bodies.iter().map(|b| b.mass).collect();
+        let g = system.bodies.gravity.norm();
+        system.bodies.contact.set_stiffness(&masses, g);
+        Ok(())
+    }
+
     /// An error naming `bodies` if the scene has any: for what does not carry them yet
     /// (`what`, e.g. the sensitivities).
     pub(crate) fn without_bodies(&self, what: &str) -> Result<(), Error> {
@@ -187,6 +267,7 @@ impl Scene {
             system.bodies.loads.push(load);
         }
         system.drive_bodies(0.0);
+        self.add_body_shapes(&mut system)?;
         for (i, pin) in self.pins.iter().enumerate() {
             let Some(name) = &pin.body else { continue };
             let body = self.bodies.iter().position(|b| &b.name == name);

@@ -12,6 +12,7 @@
 //! mass `x`, with \\(C_p\\) the held point (the control point next to the clamp for a
 //! tangent pin).
 
+use crate::world::body_contact::BodyContact;
 use crate::world::path::Path;
 use crate::RodSystem;
 use nalgebra::Vector3;
@@ -30,6 +31,9 @@ pub struct Bodies {
     pub gravity: Vector3<Real>,
     /// Forces at the bodies' centres of mass (`[[loads]] body`).
     pub loads: Vec<BodyLoad>,
+    /// The bodies' contact shapes and what they meet
+    /// ([`crate::world::body_contact`]).
+    pub contact: BodyContact,
 }
 
 /// A force on a body at its centre of mass, constant or keyframed.

@@ -8,6 +8,7 @@
 //! [`Ensemble`]: crate::Ensemble
 
 pub mod bodies;
+pub mod body_contact;
 pub(crate) mod ensemble;
 pub mod estimate;
 pub(crate) mod grab;

@@ -412,6 +412,15 @@ impl System for RodSystem {
     fn attachments(&self) -> &[Attachment] {
         &self.bodies.attachments
     }
+    fn add_body_potential(
+        &self,
+        body: usize,
+        pose: (&Vector3<Real>, &nalgebra::UnitQuaternion<Real>),
+        grad: &mut nalgebra::Vector6<Real>,
+        hess: &mut nalgebra::Matrix6<Real>,
+    ) -> Real {
+        self.body_contact(body, pose, grad, hess)
+    }
     fn potential_energy(&self) -> Real {
         let total: Real = self.acting().map(|e| e.energy(&self.rod)).sum();
         if !total.is_finite() {

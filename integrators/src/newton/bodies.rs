@@ -253,18 +253,46 @@ impl Coupling {
         Ok(())
     }
 
-    /// Each body's residual and (inverted) matrix at its iterate, with the geometric
-    /// stiffness of the multipliers `mu` of the last iteration.
-    pub fn assemble(&mut self, mu: &[Vector3<Real>]) -> Result<(), IntegratorError> {
+    /// Body `k`'s own potential at its iterate ([`System::add_body_potential`]) with
+    /// its gradient and Hessian in the unknowns `y`: \(s\,(g_x, T^T g_\theta)\) and
+    /// \(J^T H J\), \(J = \mathrm{diag}(sI, sT)\).
+    fn potential(&self, system: &dyn System, k: usize) -> (Real, Vector6<Real>, Matrix6<Real>) {
+        let (s, _) = self.scales();
+        let (x, r) = self.pose(k);
+        let (mut g, mut h) = (Vector6::zeros(), Matrix6::zeros());
+        let e = system.add_body_potential(k, (&x, &r), &mut g, &mut h);
+        if e == 0.0 && g == Vector6::zeros() {
+            return (e, g, h);
+        }
+        let w = self.bodies[k].y.fixed_rows::<3>(3).into_owned();
+        let mut jac = Matrix6::identity() * s;
+        jac.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(left_jacobian(&(w * s)) * s));
+        (e, jac.transpose() * g, jac.transpose() * h * jac)
+    }
+
+    /// Each body's residual and (inverted) matrix at its iterate, with its own
+    /// potential and the geometric stiffness of the multipliers `mu` of the last
+    /// iteration.
+    pub fn assemble(
+        &mut self,
+        system: &dyn System,
+        mu: &[Vector3<Real>],
+    ) -> Result<(), IntegratorError> {
         let (s, ratio) = self.scales();
         let form = self.form.ok_or(IntegratorError::SolverState("no bodies"))?;
+        let potentials: Vec<_> = (0..self.bodies.len())
+            .map(|k| self.potential(system, k))
+            .collect();
         for (k, b) in self.bodies.iter_mut().enumerate() {
+            let (_, pg, ph) = potentials[k];
             let mass = Matrix6::from_diagonal(&stack(Vector3::repeat(b.mass), Vector3::zeros()))
                 + embed(&b.inertia);
             let (residual, matrix) = match form {
                 BodyForm::Dynamic { .. } => (mass * (b.y - b.reference) - b.load * s, mass),
                 BodyForm::Static { regularization } => (-b.load, mass * regularization),
             };
+            let (residual, matrix) = (residual + pg, matrix + ph);
             let mut geometric = Matrix3::zeros();
             for l in self.links.iter().filter(|l| l.body == k) {
                 let m = mu.get(l.pin).copied().unwrap_or_default();
@@ -349,9 +377,16 @@ impl Coupling {
     }
 
     /// The bodies' part of the merit at their iterates.
-    pub fn merit(&self) -> Real {
+    pub fn merit(&self, system: &dyn System) -> Real {
         let Some(form) = self.form else { return 0.0 };
         let (s, _) = self.scales();
+        let potential: Real = (0..self.bodies.len())
+            .map(|k| {
+                let (x, r) = self.pose(k);
+                let (mut g, mut h) = (Vector6::zeros(), Matrix6::zeros());
+                system.add_body_potential(k, (&x, &r), &mut g, &mut h)
+            })
+            .sum();
         let each = self.bodies.iter().map(|b| {
             let work = -s * b.load.dot(&b.y);
             match form {
@@ -363,7 +398,7 @@ impl Coupling {
                 BodyForm::Static { .. } => work,
             }
         });
-        each.sum()
+        each.sum::<Real>() + potential
     }
 
     /// Writes the bodies' iterates into the system: poses, and velocities of a step
@@ -402,16 +437,17 @@ pub(super) fn set_targets(
 /// and the compliance they add to the pins' Schur complement ([`bodies`]).
 pub(super) fn couple_bodies(
     problem: &dyn NewtonProblem,
-    rod: &Rod,
+    system: &dyn System,
     ws: &mut NewtonWorkspace,
 ) -> Result<(), IntegratorError> {
+    let rod = system.rod();
     ws.coupling.set_form(problem.body_form());
     ws.coupling.refresh(rod)?;
     let pins = std::mem::take(&mut ws.coupling.pins);
     let set = set_targets(problem, rod, &pins, ws);
     ws.coupling.pins = pins;
     set?;
-    ws.coupling.assemble(&ws.multipliers)?;
+    ws.coupling.assemble(system, &ws.multipliers)?;
     ws.coupling.couple(&mut ws.constraints);
     Ok(())
 }

@@ -46,7 +46,7 @@ pub(super) fn line_search(
     let phi0 = match (search, known) {
         (false, _) => 0.0,
         (true, Some(phi)) => phi,
-        (true, None) => problem.merit(system) + ws.coupling.merit(),
+        (true, None) => problem.merit(system) + ws.coupling.merit(system),
     };
     // An admissible iterate stays admissible (System::admissible).
     let guard = search && system.admissible();
@@ -62,7 +62,7 @@ pub(super) fn line_search(
         if !search {
             return Ok((t, None));
         }
-        let phi = problem.merit(system) + ws.coupling.merit();
+        let phi = problem.merit(system) + ws.coupling.merit(system);
         let admissible = !guard || system.admissible();
         let armijo = admissible && phi <= phi0 + 1e-4 * t * slope;
         let noise = admissible && (phi - phi0).abs() <= 1e-14 * phi0.abs();

@@ -277,7 +277,7 @@ pub fn solve(
         stats.newton_iterations = tracker.iterations();
         problem.residual_and_matrix(system, &mut ws.r, ws.solver.matrix_mut());
         if coupled {
-            couple_bodies(problem, system.rod(), ws)?;
+            couple_bodies(problem, system, ws)?;
         }
         let mut slope = newton_direction(problem, system, x, ws, true, &mut stats)?;
         let descends = slope < 0.0;

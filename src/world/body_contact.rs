@@ -1,0 +1,142 @@
+//! Bodies resting on the floor and on obstacles: contact spheres and capsules declared
+//! on a body ([`BodyShape`]), frictionless, by a penalty in the body's own potential
+//! ([`System::add_body_potential`], solved in the same Newton system).
+//!
+//! A shape is a body-fixed segment `a`–`b` (a sphere when `a = b`) of radius `r`. Against
+//! a surface (the floor or an `[[obstacles]]` entry, [`Obstacle::distance`]) its gap is
+//! \\(g = d(p) - r\\) at the point `p` of the segment nearest the surface (found by
+//! projections for a sphere or capsule; against a plane both ends count, so a capsule
+//! lying on it rests on both), and it adds
+//!
+//! \\[ E = \tfrac12 k\, \min(g, 0)^2, \qquad \nabla_x E = k g\, n, \qquad
+//! \nabla_\theta E = (p - x)\times (k g\, n), \\]
+//!
+//! with the Hessian \\(k\, J^T J\\), \\(J = [\,n^T,\ ((p - x)\times n)^T\,]\\) (the
+//! surface's and the segment's curvature left out: definite). The stiffness of a body is
+//! chosen, not asked: its weight (at least under 9.81 m/s²) on one shape sinks it by 1 %
+//! of its smallest radius, \\(k = M \max(|g|, 9.81) / (0.01\, r_{min})\\).
+
+use crate::RodSystem;
+use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
+use splinerod_core::Real;
+use splinerod_energies::Obstacle;
+
+/// How far a body's weight on one of its shapes sinks it, as a fraction of the shape's
+/// radius (the penalty's stiffness, module docs).
+pub const SINK_FRACTION: Real = 0.01;
+
+/// A contact shape on a body: the segment `a`–`b` in the body frame (a sphere when equal)
+/// and its radius.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyShape {
+    /// Index of the body.
+    pub body: usize,
+    /// One end (the centre of a sphere), body frame, m.
+    pub a: Vector3<Real>,
+    /// The other end, body frame, m.
+    pub b: Vector3<Real>,
+    /// Radius, m (> 0).
+    pub radius: Real,
+}
+
+/// The bodies' shapes, the surfaces they meet and each body's penalty stiffness.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BodyContact {
+    /// The shapes.
+    pub shapes: Vec<BodyShape>,
+    /// The floor and the (static) obstacles.
+    pub surfaces: Vec<Obstacle>,
+    /// Penalty stiffness per body, N/m.
+    pub stiffness: Vec<Real>,
+}
+
+impl BodyContact {
+    /// The stiffness of every body from its mass and smallest shape (module docs).
+    pub fn set_stiffness(&mut self, masses: &[Real], gravity: Real) {
+        let g = gravity.max(9.81);
+        self.stiffness = masses
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let mine = self.shapes.iter().filter(|s| s.body == k);
+                let r = mine.map(|s| s.radius).fold(Real::INFINITY, Real::min);
+                if r.is_finite() {
+                    m * g / (SINK_FRACTION * r)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+    }
+}
+
+/// The points of the segment `a`–`b` that touch `surface`: both ends against a plane (a
+/// capsule lying on it rests on both), else the point nearest the surface.
+fn points(
+    a: Vector3<Real>,
+    b: Vector3<Real>,
+    surface: &Obstacle,
+) -> impl Iterator<Item = (&Obstacle, Vector3<Real>)> {
+    let sphere = a == b;
+    let pair = match surface {
+        Obstacle::Plane { .. } => [Some(a), (!sphere).then_some(b)],
+        _ => [Some(nearest(a, b, surface)), None],
+    };
+    pair.into_iter().flatten().map(move |p| (surface, p))
+}
+
+/// The point of the segment `a`–`b` nearest a sphere's or capsule's core.
+fn nearest(a: Vector3<Real>, b: Vector3<Real>, surface: &Obstacle) -> Vector3<Real> {
+    let axis = b - a;
+    if axis.norm_squared() == 0.0 {
+        return a;
+    }
+    let project =
+        |c: Vector3<Real>| a + axis * ((c - a).dot(&axis) / axis.norm_squared()).clamp(0.0, 1.0);
+    match *surface {
+        Obstacle::Plane { .. } => a,
+        Obstacle::Sphere { centre, .. } => project(centre),
+        Obstacle::Capsule { a: ca, b: cb, .. } => {
+            // Alternating projections between the two segments (converge for
+            // non-parallel segments; a handful suffices at contact scale).
+            let (mut p, core) = (project(ca), cb - ca);
+            for _ in 0..8 {
+                let t = ((p - ca).dot(&core) / core.norm_squared()).clamp(0.0, 1.0);
+                p = project(ca + core * t);
+            }
+            p
+        }
+    }
+}
+
+impl RodSystem {
+    /// Body `body`'s contact potential at the pose `(x, r)` (module docs), adding its
+    /// gradient and Hessian.
+    pub(crate) fn body_contact(
+        &self,
+        body: usize,
+        (x, r): (&Vector3<Real>, &UnitQuaternion<Real>),
+        grad: &mut Vector6<Real>,
+        hess: &mut Matrix6<Real>,
+    ) -> Real {
+        let contact = &self.bodies.contact;
+        let k = contact.stiffness.get(body).copied().unwrap_or(0.0);
+        let mut energy = 0.0;
+        for shape in contact.shapes.iter().filter(|s| s.body == body) {
+            let (a, b) = (x + r * shape.a, x + r * shape.b);
+            for (surface, p) in contact.surfaces.iter().flat_map(|s| points(a, b, s)) {
+                let (d, n) = surface.distance(&p);
+                let gap = d - shape.radius;
+                if gap >= 0.0 {
+                    continue;
+                }
+                energy += 0.5 * k * gap * gap;
+                let moment = (p - x).cross(&n);
+                let jac = Vector6::new(n.x, n.y, n.z, moment.x, moment.y, moment.z);
+                *grad += jac * (k * gap);
+                *hess += jac * jac.transpose() * k;
+            }
+        }
+        energy
+    }
+}
