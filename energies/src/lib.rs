@@ -44,6 +44,7 @@ mod gravity;
 pub mod lanes;
 mod on_segment;
 pub mod parameters;
+pub mod rest_length;
 mod point_force;
 mod point_spring;
 mod stretching;
