@@ -57,7 +57,7 @@
 //! of one of several `[[rods]]`.
 
 use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
-use super::{by_name, largest, points_at, sample_rows, shared_json, StepView};
+use super::{by_name, largest, points_at, rest_length, sample_rows, shared_json, StepView};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
@@ -167,6 +167,16 @@ pub fn observed_sensitivities(
     let mut rates = Rates::new(scene, &sim.system, paths, targets)?;
     let n = sim.system.rod.len();
     let mut states = vec![ForwardState::new(n); paths.len()];
+    for (state, t) in states.iter_mut().zip(&rates.targets) {
+        if let Target::Energy(name, None) = *t {
+            let start = rest_length::is_rest_length(name)
+                .then(|| rest_length::initial_rate(scene, &sim.system.rod))
+                .flatten();
+            if let Some(rate) = start {
+                state.positions = rate;
+            }
+        }
+    }
     let (s, rows) = sample_rows(scene, &sim.system.rod)?;
     let dt = scene.solver.dt.unwrap_or_default();
     let mut times = Vec::with_capacity(scene.step_count());
@@ -311,6 +321,8 @@ struct Rates {
     barrier: Vec<Option<Real>>,
     /// `1/μ` (the density's mass rate).
     inverse_density: Real,
+    /// `1/L` (the rest length's mass rate: \\(M \propto L\\)).
+    inverse_length: Real,
     /// Per parameter and grab, the derivative of the grab's start point.
     grab_from: Vec<Vec<Option<Vector3<Real>>>>,
     /// Per grab, whether it had not started before the step.
@@ -341,6 +353,9 @@ impl Rates {
             let value = target_value(scene, t);
             barrier.push(barrier_rate(system, scene, t, value)?);
             if let Target::Energy(name, segment) = *t {
+                if rest_length::is_rest_length(name) {
+                    rest_length::check_energies(system, path)?;
+                }
                 let found = energy_rate(system, name, segment, &mut probe)?;
                 if !found && name != "linear_density" {
                     let reason = "no energy of the scene depends on it (is it set?)";
@@ -354,6 +369,7 @@ impl Rates {
             targets,
             barrier,
             inverse_density: 1.0 / system.rod.material().linear_density,
+            inverse_length: 1.0 / system.rod.material().rest_length,
             waiting: Vec::with_capacity(system.grabs.len()),
             pin_rates,
             scratch: Vec::with_capacity(system.rod.len()),
@@ -387,6 +403,9 @@ impl Rates {
         match self.targets[k] {
             Target::Energy(name, segment) => {
                 energy_rate(system, name, segment, out)?;
+                if rest_length::is_rest_length(name) {
+                    rest_length::add_derived(system, out);
+                }
             }
             Target::Load(i, c) => {
                 let row = system.rod.basis_at(system.loads[i].force.at)?;
@@ -442,6 +461,9 @@ impl ParameterRates for Rates {
     fn mass_rate(&self, k: usize) -> Real {
         match self.targets[k] {
             Target::Energy("linear_density", None) => self.inverse_density,
+            Target::Energy(name, None) if rest_length::is_rest_length(name) => {
+                self.inverse_length
+            }
             _ => 0.0,
         }
     }
