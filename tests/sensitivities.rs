@@ -350,7 +350,11 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
     ]);
     assert!(line.contains("rod.colour"), "{line}");
     // A pin the scene lacks, a component a position lacks: exit 2, named.
-    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rods[0].rest_length"] {
+    for bad in [
+        "pins[7].position[0]",
+        "pins[0].position[3]",
+        "rods[0].rest_length",
+    ] {
         let params = format!("--params={bad}");
         let line = refused(&["sensitivities", "scenes/catenary_static.toml", &params]);
         assert!(line.contains(bad), "{line}");
@@ -453,7 +457,10 @@ fn the_rest_length_moves_a_start_that_follows_it() {
     assert!(error < 1e-6, "relative error {error:e}");
     let found = static_sensitivities(&scene, &["rod.rest_length"]).expect("sensitivities");
     let end = found.positions[0].last().expect("samples");
-    assert!((end[0] - 1.0).abs() < 1e-12 && end[1].abs() < 1e-12, "{end:?}");
+    assert!(
+        (end[0] - 1.0).abs() < 1e-12 && end[1].abs() < 1e-12,
+        "{end:?}"
+    );
 }
 
 #[test]

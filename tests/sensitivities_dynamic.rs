@@ -436,4 +436,3 @@ fn friction_paths_of_static_scenes_and_per_surface_friction_are_named() {
         assert!(e.to_string().contains(path), "{e}");
     }
 }
-

@@ -461,9 +461,7 @@ impl ParameterRates for Rates {
     fn mass_rate(&self, k: usize) -> Real {
         match self.targets[k] {
             Target::Energy("linear_density", None) => self.inverse_density,
-            Target::Energy(name, None) if rest_length::is_rest_length(name) => {
-                self.inverse_length
-            }
+            Target::Energy(name, None) if rest_length::is_rest_length(name) => self.inverse_length,
             _ => 0.0,
         }
     }

@@ -55,9 +55,11 @@ pub(crate) fn check_scene(scene: &Scene, path: &str) -> Result<(), Error> {
         return Err(bad(reason.into()));
     }
     if follows_length(scene) {
-        let moved = scene.pins.iter().enumerate().find(|(_, p)| {
-            p.at != 0.0 && (p.position.is_some() || p.path.is_some())
-        });
+        let moved = scene
+            .pins
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.at != 0.0 && (p.position.is_some() || p.path.is_some()));
         if let Some((i, p)) = moved {
             let field = if p.path.is_some() { "path" } else { "position" };
             let reason = format!(
@@ -79,6 +81,11 @@ fn follows_length(scene: &Scene) -> bool {
 /// The rod's start (`rod.start`, default the origin).
 fn start(scene: &Scene) -> Vector3<Real> {
     Vector3::from(scene.rod.start.unwrap_or([0.0; 3]))
+}
+
+/// Where `rod.rest_length` is among the parameter `paths`, if it is.
+pub(crate) fn index_in<S: AsRef<str>>(paths: &[S]) -> Option<usize> {
+    paths.iter().position(|p| p.as_ref() == PATH)
 }
 
 /// Whether `name` (an energy parameter target's) is the rest length.
