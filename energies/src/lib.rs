@@ -44,9 +44,9 @@ mod gravity;
 pub mod lanes;
 mod on_segment;
 pub mod parameters;
-pub mod rest_length;
 mod point_force;
 mod point_spring;
+pub mod rest_length;
 mod stretching;
 #[cfg(test)]
 mod test_rods;

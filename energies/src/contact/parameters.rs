@@ -53,7 +53,11 @@ impl Parameters for Contact {
 
 impl Contact {
     /// `out += (∇E + ∇E_pairs) / L` (module docs).
-    fn add_rest_length_rate(&self, rod: &Rod, out: &mut [Vector3<Real>]) -> Result<bool, CoreError> {
+    fn add_rest_length_rate(
+        &self,
+        rod: &Rod,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
         let l = rod.material().rest_length;
         if !(l.is_finite() && l > 0.0) {
             return Err(CoreError::InvalidParameter {
