@@ -140,6 +140,15 @@ pub trait NewtonProblem {
     fn indefinite_allowed(&self) -> bool {
         false
     }
+    /// Whether a step whose exact matrix factorised indefinite while a Hessian remainder
+    /// needs the correction (which an indefinite factor cannot precondition) factorises
+    /// the definite matrix instead and carries the difference with the remainder
+    /// ([`carried`]), so that the step is the exact one and Newton converges
+    /// quadratically; otherwise the step leaves the remainder out. Default false (time
+    /// steps: unchanged); static solves say true.
+    fn carries_indefinite(&self) -> bool {
+        false
+    }
     /// Whether a step moving material points by at most `step` (m) ends the solve; the
     /// default compares it with `tolerance` (m).
     fn converged(&self, step: Real, tolerance: Real) -> bool {
@@ -305,7 +314,13 @@ fn newton_direction(
         }
     }
     stats.symbolic_analyses += ws.solver.analyses() - analyses;
-    solve_factored(problem, system, x, ws, stats)
+    if !problem.carries_indefinite() {
+        return solve_factored(problem, system, x, ws, stats);
+    }
+    tangent::carry_if_indefinite(problem, system, ws)?;
+    let slope = solve_factored(problem, system, x, ws, stats);
+    ws.carried.active = false;
+    slope
 }
 
 /// With `A` and the pins factorised, solves the KKT system for the residual `ws.r` and
