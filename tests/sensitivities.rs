@@ -158,6 +158,12 @@ fn the_cantilever_s_sensitivities_match_finite_differences() {
         ],
     );
     assert!(error < 1e-6, "relative error {error:e}");
+    // With uniform knots the clamp is a penalty of stiffness 1e6 EI/L, which follows
+    // the rest length too.
+    let mut penalty = tight("cantilever");
+    penalty.rod.knots = Some(splinerod::scene::KnotsSpec::Named("uniform".into()));
+    let error = check(&penalty, &[("rod.rest_length", &rest_length)]);
+    assert!(error < 1e-6, "penalty clamp: relative error {error:e}");
 }
 
 #[test]
