@@ -13,7 +13,7 @@
 //! factorisation per step, one solve per parameter); then \\(S_q, S_v\\) follow from the
 //! scheme's update ([`splinerod_integrators::forward`] states every case, BDF2's
 //! two-step base and its implicit-midpoint start included). The start does not depend on
-//! the parameters: \\(S_q = S_v = 0\\) at `t = 0`.
+//! the parameters, \\(S_q = S_v = 0\\) at `t = 0`, except on a rest length it follows.
 //!
 //! **The terms per parameter.** `rod.stretch_stiffness`, `rod.bending_stiffness`,
 //! `rod.twist_stiffness`, `world.gravity[c]`: \\(\partial_p \nabla E\\) from the energies'
@@ -30,6 +30,10 @@
 //! rod starts where it does (\\(S_q(0) = 0\\)), so the first step carries the pinned
 //! point to its moved target. `contact.friction` (μ): the friction potential of the
 //! step's lags is linear in μ, \\(\partial_\mu\nabla D = \nabla D/\mu\\).
+//! `rod.rest_length` (`L`, `sensitivity/rest_length.rs`): every energy's
+//! \\(\partial_L\nabla E\\), a penalty clamp's derived stiffness, \\(M' = M/L\\), and
+//! where the rod's start follows `L` (no `rod.end`) \\(S_q(0) = (q_0 - x_{start})/L\\)
+//! and the pins' targets' rates.
 //!
 //! **What a step freezes at its start.** Friction's lags depend on the state \\(q_n\\)
 //! the step starts from: the anchors \\(q^{start}\\) the slip is measured from, and the
