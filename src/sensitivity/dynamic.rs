@@ -172,13 +172,9 @@ pub fn observed_sensitivities(
     let n = sim.system.rod.len();
     let mut states = vec![ForwardState::new(n); paths.len()];
     for (state, t) in states.iter_mut().zip(&rates.targets) {
-        if let Target::Energy(name, None) = *t {
-            let start = rest_length::is_rest_length(name)
-                .then(|| rest_length::initial_rate(scene, &sim.system.rod))
-                .flatten();
-            if let Some(rate) = start {
-                state.positions = rate;
-            }
+        if matches!(*t, Target::Energy(name, None) if rest_length::is_rest_length(name)) {
+            let start = rest_length::initial_rate(scene, &sim.system.rod);
+            state.positions = start.unwrap_or_else(|| vec![Vector3::zeros(); n]);
         }
     }
     let (s, rows) = sample_rows(scene, &sim.system.rod)?;

@@ -140,12 +140,10 @@ pub trait NewtonProblem {
     fn indefinite_allowed(&self) -> bool {
         false
     }
-    /// Whether a step whose exact matrix factorised indefinite while a Hessian remainder
-    /// needs the correction (which an indefinite factor cannot precondition) factorises
-    /// the definite matrix instead and carries the difference with the remainder
-    /// ([`carried`]), so that the step is the exact one and Newton converges
-    /// quadratically; otherwise the step leaves the remainder out. Default false (time
-    /// steps: unchanged); static solves say true.
+    /// Whether a step whose exact matrix factorised indefinite while a remainder needs
+    /// the correction carries the difference to the definite matrix with it ([`carried`]:
+    /// the exact step, quadratic convergence) instead of leaving the remainder out.
+    /// Default false (time steps); static solves say true.
     fn carries_indefinite(&self) -> bool {
         false
     }
@@ -314,10 +312,9 @@ fn newton_direction(
         }
     }
     stats.symbolic_analyses += ws.solver.analyses() - analyses;
-    if !problem.carries_indefinite() {
-        return solve_factored(problem, system, x, ws, stats);
+    if problem.carries_indefinite() {
+        tangent::carry_if_indefinite(problem, system, ws)?;
     }
-    tangent::carry_if_indefinite(problem, system, ws)?;
     let slope = solve_factored(problem, system, x, ws, stats);
     ws.carried.active = false;
     slope
