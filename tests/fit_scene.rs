@@ -422,6 +422,12 @@ fn the_rest_length_is_fitted_from_markers_in_metres() {
     .expect("written back");
     let back = Scene::from_toml(&written).expect("scene");
     assert_eq!(back.rod.rest_length, report.parameters[0]);
+    // Shorter than its farthest marker (0.975 m), the rod no longer carries it: named.
+    let mut fit = SceneFit::new(&start, &params, &files).expect("fit");
+    let mut r = vec![0.0; splinerod::fit::Model::residual_count(&fit)];
+    let e = splinerod::fit::Model::evaluate(&mut fit, &[0.95, 100.0], &mut r, None)
+        .expect_err("too short");
+    assert!(e.to_string().contains("rod.rest_length"), "{e}");
 }
 
 #[test]

@@ -206,6 +206,13 @@ impl Model for RunFit<'_> {
             set_parameter(&mut self.scene, path, v)?;
         }
         let (scene, observations) = (&self.scene, &self.observations);
+        if crate::sensitivity::rest_length::index_in(&self.paths).is_some() {
+            let marks = observations.iter().filter_map(|o| match o.what {
+                Observed::Marker(s) => Some(s),
+                _ => None,
+            });
+            crate::sensitivity::rest_length::check_markers(scene, marks.reduce(Real::max))?;
+        }
         let paths = if j.is_some() { &self.paths[..] } else { &[] };
         let rest = crate::sensitivity::rest_length::index_in(paths);
         let length = scene.rod_spec(0).rest_length;

@@ -136,6 +136,10 @@ impl Model for SceneFit<'_> {
         for (path, &v) in self.paths.iter().zip(p) {
             set_parameter(&mut self.scene, path, v)?;
         }
+        if rest_length::index_in(&self.paths).is_some() {
+            let farthest = self.markers.iter().map(|m| m.0).reduce(Real::max);
+            rest_length::check_markers(&self.scene, farthest)?;
+        }
         let found = static_sensitivities(&self.scene, &self.paths)?;
         let n = p.len();
         let rest = rest_length::index_in(&self.paths);

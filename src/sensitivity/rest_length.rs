@@ -149,6 +149,20 @@ pub(crate) fn pin_rates(scene: &Scene, pins: &[splinerod_core::Pin], out: &mut [
     }
 }
 
+/// An error naming `rod.rest_length` if a fit took it below the farthest marker `s`
+/// (m): the marker would no longer lie on the rod.
+pub(crate) fn check_markers(scene: &Scene, farthest: Option<Real>) -> Result<(), Error> {
+    let l = scene.rod.rest_length;
+    match farthest.filter(|&s| s > l) {
+        Some(s) => Err(Error::field(
+            PATH,
+            l,
+            format!("the fit shortened the rod below its marker at s = {s} m"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// For a material point at `s` m of rest length (a marker, a point of Python's
 /// `positions(s)`), `d += −(s/L) C'(s)` on `rod`: the point moves along the rod as `L`
 /// changes (module docs).
