@@ -20,11 +20,13 @@
 //! **Parameters**, named by their scene path ([`paths`]): `rod.stretch_stiffness`,
 //! `rod.bending_stiffness`, `rod.twist_stiffness`, `rod.linear_density` (through the
 //! weight), the same on `rods[k].…` of a `[[rods]]` scene, `world.gravity[c]`,
-//! `loads[i].force[c]` and `pins[i].position[c]`. Anything else — an unknown path, a
+//! `loads[i].force[c]`, `pins[i].position[c]` and `rod.rest_length` (the domain
+//! `[0, L]` scaled with every material coordinate at its fraction:
+//! `sensitivity/rest_length.rs`). Anything else — an unknown path, a
 //! vector without its index, a parameter no energy of the scene depends on — is an
 //! error naming the path. `rod.damping` and `contact.friction` are parameters of runs
 //! (friction acts only through the lags a time step freezes: an equilibrium does not
-//! depend on it); `rod.rest_length` is refused (`paths::REST_LENGTH`).
+//! depend on it); a `[[rods]]` entry's rest length is refused (`paths::REST_LENGTH`).
 //!
 //! Outputs: the samples' positions (at fixed fractions of the rest length) and every
 //! `[[pins]]` entry's force (the derivative of the multipliers, from the same solve).
@@ -33,6 +35,7 @@
 
 mod dynamic;
 pub mod paths;
+pub(crate) mod rest_length;
 mod step_view;
 
 pub use paths::{parameter_value, set_parameter};
@@ -257,10 +260,16 @@ fn derivative(
             Ok((load.force[c], b))
         }
         Target::Energy(name, segment) => {
+            if rest_length::is_rest_length(name) {
+                rest_length::check_energies(system, path)?;
+            }
             if !energy_rate(system, name, segment, &mut b)? {
                 let reason =
                     "no energy of the scene depends on it (is it set, and is it not a constraint?)";
                 return Err(Error::field("params", format!("\"{path}\""), reason));
+            }
+            if rest_length::is_rest_length(name) {
+                rest_length::add_derived(system, &mut b);
             }
             Ok((paths::value(scene, name, segment), b))
         }

@@ -6,10 +6,14 @@
 //! \\(\mathrm{d}C(s)/\mathrm{d}p = \sum_i b_i(s)\, \mathrm{d}q_i/\mathrm{d}p\\).
 //! Python's `Simulation.sensitivities(params, s)` is this; for a run (implicit Euler,
 //! BDF2), [`run_sensitivities_at`] gives them after every step from the forward
-//! sensitivities (`Simulation.sensitivity_history`), the last of them at the end.
+//! sensitivities (`Simulation.sensitivity_history`), the last of them at the end. A
+//! coordinate in metres is the same material point whatever the rest length, so
+//! `rod.rest_length`'s derivative has the extra \\(-(s/L)\, C'(s)\\) (the point slides
+//! along the rescaled domain: `sensitivity/rest_length.rs`).
 
 use crate::sensitivity::{
-    observed_sensitivities, points_at, static_sensitivities, StaticSensitivities, StepView,
+    observed_sensitivities, points_at, rest_length, static_sensitivities, StaticSensitivities,
+    StepView,
 };
 use crate::{Error, Scene};
 use nalgebra::Vector3;
@@ -58,14 +62,18 @@ pub fn evaluate_at(
         .map(|&x| rod.basis_at(x))
         .collect::<Result<Vec<_>, _>>()?;
     let point = |q: &[Vector3<Real>]| points_at(&rows, q);
+    let mut positions: Vec<Vec<[Real; 3]>> = sensitivities
+        .control_points
+        .iter()
+        .map(|d| point(d))
+        .collect();
+    if let Some(k) = rest_length::index_in(&names(&sensitivities.parameters)) {
+        shift_by_rest_length(rod, s, &mut positions[k])?;
+    }
     Ok(SensitivitiesAt {
         parameters: sensitivities.parameters.clone(),
         s: s.to_vec(),
-        positions: sensitivities
-            .control_points
-            .iter()
-            .map(|d| point(d))
-            .collect(),
+        positions,
         at: point(&rod.positions),
     })
 }
@@ -100,6 +108,7 @@ pub fn run_sensitivities_at(
     );
     check_coordinates(s, rod)?;
     let (mut times, mut positions, mut at) = (Vec::new(), Vec::new(), Vec::new());
+    let rest = rest_length::index_in(paths);
     let mut rows = Vec::new();
     let mut observe = |view: &StepView<'_>| {
         let (t, rod, states) = (view.t, view.rod, view.states);
@@ -112,7 +121,11 @@ pub fn run_sensitivities_at(
         }
         let point = |q: &[Vector3<Real>]| points_at(&rows, q);
         times.push(t);
-        positions.push(states.iter().map(|d| point(&d.positions)).collect());
+        let mut d: Vec<Vec<[Real; 3]>> = states.iter().map(|d| point(&d.positions)).collect();
+        if let Some(k) = rest {
+            shift_by_rest_length(rod, s, &mut d[k])?;
+        }
+        positions.push(d);
         at.push(point(&rod.positions));
         Ok(())
     };
@@ -124,6 +137,27 @@ pub fn run_sensitivities_at(
         positions,
         at,
     })
+}
+
+/// The parameters' names.
+fn names(parameters: &[(String, Real)]) -> Vec<&str> {
+    parameters.iter().map(|(n, _)| n.as_str()).collect()
+}
+
+/// The rest length's derivatives `d` of the points at the coordinates `s` (m), which
+/// slide along the rod as `L` changes: each gets \\(-(s/L)\, C'(s)\\)
+/// (`sensitivity/rest_length.rs`).
+fn shift_by_rest_length(
+    rod: &splinerod_core::Rod,
+    s: &[Real],
+    d: &mut [[Real; 3]],
+) -> Result<(), Error> {
+    for (x, &s) in d.iter_mut().zip(s) {
+        let mut v = Vector3::from(*x);
+        rest_length::add_metric_shift(rod, s, &mut v)?;
+        *x = v.into();
+    }
+    Ok(())
 }
 
 /// An error naming `s` unless every coordinate is finite and inside `[start, end]`.

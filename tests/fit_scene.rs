@@ -370,3 +370,102 @@ fn a_points_residual_derivative_matches_differences() {
         );
     }
 }
+
+/// The catenary pinned 0.8 m apart with rest length `l` and EA `ea`.
+fn catenary(l: Real, ea: Real) -> String {
+    format!(
+        "[rod]\nrest_length = {l}\nlinear_density = 0.1\nstretch_stiffness = {ea}\n\
+         control_points = 16\nstart = [0.0, 0.0, 0.0]\nend = [0.8, 0.0, 0.0]\n\n\
+         [[pins]]\nat = 0.0\n\n[[pins]]\nat = 1.0\n\n\
+         [world]\ngravity = [0.0, -9.81, 0.0]\n\n[solver]\nmethod = \"static\"\ntolerance = 1e-12\n"
+    )
+}
+
+#[test]
+fn the_rest_length_is_fitted_from_markers_in_metres() {
+    // Markers painted every 2.5 cm along a rope of 1 m (σ = 0.1 mm); the fit starts
+    // from 1.03 m and EA 150 N, and writes the fitted length back to the file.
+    let truth = Scene::from_toml(&catenary(1.0, 100.0)).expect("scene");
+    let rod = splinerod::sensitivity::static_sensitivities(&truth, &["rod.rest_length"])
+        .expect("the true equilibrium")
+        .rod;
+    let mut csv = String::from("t,s,x,y,z,sigma\n");
+    for k in 0..39 {
+        let s = (k + 1) as Real / 40.0;
+        let p = rod.point(s).expect("point");
+        let n = |c: usize| 1e-4 * common::noise(3 * k + c);
+        csv += &format!(",{s},{},{},{},1e-4\n", p.x + n(0), p.y + n(1), p.z + n(2));
+    }
+    let files = [ObservationFile::parse("markers.csv", &csv).expect("markers")];
+    let text = catenary(1.03, 150.0);
+    let start = Scene::from_toml(&text).expect("scene");
+    let params = ["rod.rest_length", "rod.stretch_stiffness"];
+    let report = SceneFit::new(&start, &params, &files)
+        .expect("fit")
+        .fit()
+        .expect("fitted");
+    println!("{report:?}");
+    assert!(report.converged);
+    common::recovered(&report, &params, &[1.0, 100.0]);
+    assert!(
+        (report.parameters[0] - 1.0).abs() < 1e-4,
+        "{}",
+        report.parameters[0]
+    );
+    let names: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+    let written = splinerod::fit::scene_out::with_fitted_values(
+        "start.toml",
+        &text,
+        &names,
+        &report.parameters,
+    )
+    .expect("written back");
+    let back = Scene::from_toml(&written).expect("scene");
+    assert_eq!(back.rod.rest_length, report.parameters[0]);
+    // Shorter than its farthest marker (0.975 m), the rod no longer carries it: named.
+    let mut fit = SceneFit::new(&start, &params, &files).expect("fit");
+    let mut r = vec![0.0; splinerod::fit::Model::residual_count(&fit)];
+    let e = splinerod::fit::Model::evaluate(&mut fit, &[0.95, 100.0], &mut r, None)
+        .expect_err("too short");
+    assert!(e.to_string().contains("rod.rest_length"), "{e}");
+}
+
+#[test]
+fn points_in_metres_move_along_the_rod_with_its_rest_length() {
+    // Python's `sensitivities(params, s)` takes s in metres: a point keeps its distance
+    // from the start as L changes, so its derivative has −(s/L) C'(s) besides the
+    // control points'.
+    let scene = Scene::from_toml(&catenary(1.0, 100.0)).expect("scene");
+    let s = [0.0, 0.25, 0.6, 0.95];
+    let path = ["rod.rest_length"];
+    let exact = splinerod::sensitivity_at::static_sensitivities_at(&scene, &path, &s)
+        .expect("sensitivities");
+    let at = |l: Real| {
+        let mut moved = scene.clone();
+        splinerod::sensitivity::set_parameter(&mut moved, path[0], l).expect("set");
+        splinerod::sensitivity_at::static_sensitivities_at(&moved, &path, &s)
+            .expect("moved")
+            .at
+    };
+    let central = |h: Real| {
+        let (a, b) = (at(1.0 + h), at(1.0 - h));
+        let d: Vec<[Real; 3]> = a
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| std::array::from_fn(|c| (a[c] - b[c]) / (2.0 * h)))
+            .collect();
+        d
+    };
+    let (coarse, fine) = (central(1e-4), central(5e-5));
+    let largest = exact.positions[0]
+        .iter()
+        .flatten()
+        .fold(0.0, |m: Real, x| m.max(x.abs()));
+    for ((d, c), f) in exact.positions[0].iter().zip(&coarse).zip(&fine) {
+        for i in 0..3 {
+            let reference = (4.0 * f[i] - c[i]) / 3.0;
+            let error = (d[i] - reference).abs() / largest;
+            assert!(error < 1e-6, "{d:?} vs {reference}: {error:e}");
+        }
+    }
+}

@@ -1,7 +1,8 @@
 //! Sensitivities of static equilibria (#48) against central finite differences of static
 //! solves (two step sizes, extrapolated): the catenary (EA, density, gravity, a point load), the cantilever
 //! (EI, EA, density) and a twisted clamped rod (GJ), pins' positions (held, driven,
-//! clamped); bad parameter paths named.
+//! clamped), the rest length of each and of a rope on obstacles; bad parameter paths
+//! named.
 
 use splinerod::sensitivity::{set_parameter, static_sensitivities};
 use splinerod::{Real, Scene};
@@ -26,10 +27,20 @@ fn samples(scene: &Scene) -> Vec<[Real; 3]> {
 /// Sets a parameter of a scene to a value.
 type Setter<'a> = &'a dyn Fn(&mut Scene, Real);
 
+/// Sets `rod.rest_length` (the domain scales, every material coordinate at its fraction).
+fn rest_length(scene: &mut Scene, v: Real) {
+    set_parameter(scene, "rod.rest_length", v).expect("rest length");
+}
+
 /// Checks the sensitivities of `scene` to each `(path, set)` (`set` changes the
 /// parameter by a relative `h` on a copy) against central differences; returns the
 /// largest relative error.
 fn check(scene: &Scene, cases: &[(&str, Setter<'_>)]) -> Real {
+    check_with_step(scene, cases, 1e-3)
+}
+
+/// [`check`] with the differences' relative step `step` (1e-3 in [`check`]).
+fn check_with_step(scene: &Scene, cases: &[(&str, Setter<'_>)], step: Real) -> Real {
     let paths: Vec<&str> = cases.iter().map(|c| c.0).collect();
     let exact = static_sensitivities(scene, &paths).expect("sensitivities");
     let base = samples(scene);
@@ -59,7 +70,7 @@ fn check(scene: &Scene, cases: &[(&str, Setter<'_>)]) -> Real {
                 .collect();
             d
         };
-        let h = 1e-3 * value.abs().max(1e-3);
+        let h = step * value.abs().max(1e-3);
         let (coarse, fine) = (central(h), central(h / 2.0));
         // Samples, then pin forces: each judged against its own largest derivative —
         // or, where the pin forces' vanishes (a cantilever's reaction is its weight
@@ -126,6 +137,7 @@ fn the_catenary_s_sensitivities_match_finite_differences() {
             ("loads[0].force[2]", &|s, v| {
                 s.loads[0].force.as_mut().unwrap()[2] = v
             }),
+            ("rod.rest_length", &rest_length),
         ],
     );
     assert!(error < 1e-6, "relative error {error:e}");
@@ -142,9 +154,16 @@ fn the_cantilever_s_sensitivities_match_finite_differences() {
             }),
             ("rod.stretch_stiffness", &|s, v| s.rod.stretch_stiffness = v),
             ("rod.linear_density", &|s, v| s.rod.linear_density = v),
+            ("rod.rest_length", &rest_length),
         ],
     );
     assert!(error < 1e-6, "relative error {error:e}");
+    // With uniform knots the clamp is a penalty of stiffness 1e6 EI/L, which follows
+    // the rest length too.
+    let mut penalty = tight("cantilever");
+    penalty.rod.knots = Some(splinerod::scene::KnotsSpec::Named("uniform".into()));
+    let error = check(&penalty, &[("rod.rest_length", &rest_length)]);
+    assert!(error < 1e-6, "penalty clamp: relative error {error:e}");
 }
 
 #[test]
@@ -205,6 +224,15 @@ fn a_twisted_rod_s_sensitivities_match_finite_differences() {
         ],
     );
     assert!(error < 1e-6, "relative error {error:e}");
+    // The rest length: at 1.5 m between clamps 1.5 m apart the rod is at the edge of
+    // buckling (its bending energy changes by 30 % per mm of length), so the clamps are
+    // 5 mm further apart: taut, twisted, sagging. Its tension follows the 5 mm stretch,
+    // which a step of 1e-3 (1.5 mm) changes by 30 %: the differences' truncation is then
+    // 6.5e-4 (1e-4: 6.3e-8; 1e-5: 7e-11), so they step at 1e-5.
+    let mut taut = twisted();
+    taut.rod.end = Some([0.0, 0.0, 1.505]);
+    let error = check_with_step(&taut, &[("rod.rest_length", &rest_length)], 1e-5);
+    assert!(error < 1e-6, "rest length: relative error {error:e}");
 }
 
 /// The catenary resting on an obstacle (the default barrier contact, whose stiffness
@@ -231,23 +259,29 @@ fn a_rope_on_an_obstacle_s_sensitivities_match_finite_differences() {
         ("rod.stretch_stiffness", &|s, v| s.rod.stretch_stiffness = v),
         ("rod.linear_density", &|s, v| s.rod.linear_density = v),
     ];
+    // The rest length moves the rope by half as much (0.5 m/m): differences at 1e-3
+    // (0.5 mm) cross the barrier's layer of samples entering and leaving it, so they
+    // step at 1e-5 (at 1e-3, 1e-4, 1e-5 on the plane: 1.8e-3, 9.2e-7, 2.2e-10).
+    let length: [(&str, Setter<'_>); 1] = [("rod.rest_length", &rest_length)];
     // On a plane the contact's Hessian is exact: so are the sensitivities.
     let plane =
         on_obstacle("kind = \"plane\"\npoint = [0.0, -0.22, 0.0]\nnormal = [0.0, 1.0, 0.0]\n");
-    let error = check(&plane, &cases);
+    let error = check(&plane, &cases).max(check_with_step(&plane, &length, 1e-5));
     assert!(error < 1e-6, "plane: relative error {error:e}");
     // On a sphere and a capsule the exact Hessian has the surface-curvature term
     // φ′ ∇n: it makes the banded matrix indefinite, and the tangent solve carries it with
-    // the stretching's remainder (`newton/carried.rs`): 4.8e-6 (3.3e-5 without the
-    // term; the rest not diagnosed).
+    // the stretching's remainder (`newton/carried.rs`). So do the static solve's Newton
+    // steps (`carries_indefinite`): without it they left the remainder out there,
+    // converged linearly and stopped ~1e-12 m short — the differences' noise, 4.8e-6
+    // on the sphere.
     let sphere = on_obstacle("kind = \"sphere\"\ncentre = [0.4, -0.35, 0.0]\nradius = 0.15\n");
-    let error = check(&sphere, &cases);
-    assert!(error < 1e-5, "sphere: relative error {error:e}");
+    let error = check(&sphere, &cases).max(check_with_step(&sphere, &length, 1e-5));
+    assert!(error < 1e-6, "sphere: relative error {error:e}");
     let capsule = on_obstacle(
         "kind = \"capsule\"\na = [0.4, -0.35, -0.2]\nb = [0.4, -0.35, 0.2]\nradius = 0.15\n",
     );
-    let error = check(&capsule, &cases);
-    assert!(error < 1e-5, "capsule: relative error {error:e}");
+    let error = check(&capsule, &cases).max(check_with_step(&capsule, &length, 1e-5));
+    assert!(error < 1e-6, "capsule: relative error {error:e}");
 }
 
 #[test]
@@ -327,7 +361,7 @@ fn the_command_line_writes_the_sensitivities_and_names_bad_parameters() {
     for bad in [
         "pins[7].position[0]",
         "pins[0].position[3]",
-        "rod.rest_length",
+        "rods[0].rest_length",
     ] {
         let params = format!("--params={bad}");
         let line = refused(&["sensitivities", "scenes/catenary_static.toml", &params]);
@@ -412,7 +446,6 @@ fn bad_pin_friction_and_rest_length_paths_are_named() {
         ("pins[7].position[0]", "2 [[pins]]"),
         ("pins[0].position[3]", "3 components"),
         ("pins[0].position", "not a scalar parameter"),
-        ("rod.rest_length", "rest length"),
         ("contact.friction", "no [contact]"),
     ] {
         let e = static_sensitivities(&scene, &[path])
@@ -420,4 +453,46 @@ fn bad_pin_friction_and_rest_length_paths_are_named() {
             .to_string();
         assert!(e.contains(path) && e.contains(words), "{path}: {e}");
     }
+}
+
+#[test]
+fn the_rest_length_moves_a_start_that_follows_it() {
+    // Without rod.end the rod starts straight along x for its length: the far pin
+    // moves with the rest length (a taut catenary sagging by its stretch).
+    let mut scene = tight("catenary_static");
+    scene.rod.end = None;
+    let error = check(&scene, &[("rod.rest_length", &rest_length)]);
+    assert!(error < 1e-6, "relative error {error:e}");
+    let found = static_sensitivities(&scene, &["rod.rest_length"]).expect("sensitivities");
+    let end = found.positions[0].last().expect("samples");
+    assert!(
+        (end[0] - 1.0).abs() < 1e-12 && end[1].abs() < 1e-12,
+        "{end:?}"
+    );
+}
+
+#[test]
+fn rest_lengths_that_cannot_be_followed_are_named() {
+    let path = "rod.rest_length";
+    // A rest shape: the initial curve's metric, not the domain's.
+    let mut shaped = tight("catenary_static");
+    shaped.rod.rest_shape = splinerod::scene::RestShape::Initial;
+    let e = static_sensitivities(&shaped, &[path]).expect_err("rest shape");
+    assert!(e.to_string().contains("rest_shape"), "{e}");
+    // A pin's position given while the far end follows the rest length.
+    let mut pinned = tight("catenary_static");
+    pinned.rod.end = None;
+    pinned.pins[1].position = Some([1.0, 0.0, 0.0]);
+    let e = static_sensitivities(&pinned, &[path]).expect_err("pin position");
+    assert!(e.to_string().contains("pins[1].position"), "{e}");
+    // One of several rods.
+    let two = "[[rods]]\nname = \"a\"\nrest_length = 1.0\nlinear_density = 0.1\n\
+        stretch_stiffness = 100.0\ncontrol_points = 8\n\n\
+        [[rods]]\nname = \"b\"\nrest_length = 1.0\nlinear_density = 0.1\n\
+        stretch_stiffness = 100.0\ncontrol_points = 8\nstart = [0.0, 0.0, 1.0]\n\
+        end = [1.0, 0.0, 1.0]\n\n[[pins]]\nrod = \"a\"\nat = 0.0\n\n\
+        [world]\ngravity = [0.0, -9.81, 0.0]\n[solver]\nmethod = \"static\"\n";
+    let two = Scene::from_toml(two).expect("scene");
+    let e = static_sensitivities(&two, &["rods[1].rest_length"]).expect_err("rods");
+    assert!(e.to_string().contains("rods[1].rest_length"), "{e}");
 }

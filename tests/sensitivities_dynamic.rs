@@ -1,7 +1,7 @@
 //! Forward sensitivities of runs (#48) against central finite differences of two full
 //! runs (two step sizes, extrapolated): a swinging cable and a grabbed cable, each with
-//! implicit Euler and BDF2, over 1 s, for EA, EI, the density, the damping, gravity and
-//! a point load; refused runs and bad parameters named.
+//! implicit Euler and BDF2, over 1 s, for EA, EI, the density, the damping, gravity, a
+//! point load and the rest length; refused runs and bad parameters named.
 
 use splinerod::sensitivity::{dynamic_sensitivities, set_parameter};
 use splinerod::{Real, Scene};
@@ -139,6 +139,14 @@ const SWINGING_PARAMETERS: [&str; 7] = [
     "loads[0].force[2]",
 ];
 
+/// The swinging cable's rest length against differences at a relative step 1e-4: its
+/// end is fixed, so a step starts the cable stretched or compressed by it, and at 1e-3
+/// the differences' truncation is 7e-5 / 6e-4 of BDF2's samples / pin forces (at 1e-4:
+/// 6e-9 / 2e-8).
+fn rest_length_error(scene: &Scene) -> Real {
+    check_with_step(scene, &["rod.rest_length"], 1e-4)
+}
+
 const GRABBED_PARAMETERS: [&str; 4] = [
     "rod.bending_stiffness",
     "rod.linear_density",
@@ -148,14 +156,27 @@ const GRABBED_PARAMETERS: [&str; 4] = [
 
 #[test]
 fn a_swinging_cable_s_implicit_euler_sensitivities_match_finite_differences() {
-    let error = check(&scene(SWINGING, "implicit-euler"), &SWINGING_PARAMETERS);
+    let swinging = scene(SWINGING, "implicit-euler");
+    let error = check(&swinging, &SWINGING_PARAMETERS).max(rest_length_error(&swinging));
     assert!(error < 1e-4, "relative error {error:e}");
 }
 
 #[test]
 fn a_swinging_cable_s_bdf2_sensitivities_match_finite_differences() {
-    let error = check(&scene(SWINGING, "bdf2"), &SWINGING_PARAMETERS);
+    let swinging = scene(SWINGING, "bdf2");
+    let error = check(&swinging, &SWINGING_PARAMETERS).max(rest_length_error(&swinging));
     assert!(error < 1e-4, "relative error {error:e}");
+}
+
+#[test]
+fn a_cable_whose_start_follows_its_rest_length_has_its_sensitivities() {
+    // Without rod.end the cable starts straight along x for its length: the start moves
+    // with the rest length (S_q(0) = (q₀ − start)/L), and so does the mass matrix.
+    for method in ["implicit-euler", "bdf2"] {
+        let text = SWINGING.replace("end = [1.0, 0.0, 0.0]\n", "");
+        let error = check(&scene(&text, method), &["rod.rest_length"]);
+        assert!(error < 1e-4, "{method}: relative error {error:e}");
+    }
 }
 
 #[test]
@@ -409,7 +430,7 @@ fn friction_paths_of_static_scenes_and_per_surface_friction_are_named() {
     for path in [
         "pins[7].position[0]",
         "pins[0].position[3]",
-        "rod.rest_length",
+        "rods[0].rest_length",
     ] {
         let e = dynamic_sensitivities(&sliding, &[path]).expect_err(path);
         assert!(e.to_string().contains(path), "{e}");

@@ -46,6 +46,7 @@ mod on_segment;
 pub mod parameters;
 mod point_force;
 mod point_spring;
+pub mod rest_length;
 mod stretching;
 #[cfg(test)]
 mod test_rods;

@@ -4,10 +4,14 @@
 //! positions — what the sensitivity of an equilibrium needs: from
 //! \\(\nabla E(q(p); p) = f\\), \\(K\, \mathrm{d}q/\mathrm{d}p = -\partial \nabla E / \partial p\\).
 //!
-//! The built-in energies are linear in their parameters, `E = p Ê(q)`, so the
-//! derivative is `∇E / p` ([`add_linear`]); an energy that is not says so by
-//! implementing [`Parameters::add_gradient_derivative`] itself.
+//! The built-in energies are linear in their stiffness, density and gravity parameters,
+//! `E = p Ê(q)`, so the derivative is `∇E / p` ([`add_linear`]); an energy that is not
+//! says so by implementing [`Parameters::add_gradient_derivative`] itself. Every
+//! built-in energy also has the rest length, [`REST_LENGTH`] (`"rest_length"`): the
+//! derivative at fixed control points of a domain `[0, L]` scaled with every material
+//! coordinate at a fixed fraction ([`crate::rest_length`] derives each energy's).
 
+use crate::rest_length::{add_homogeneous, add_power, REST_LENGTH};
 use crate::Energy;
 use nalgebra::Vector3;
 use splinerod_core::{CoreError, Real, Rod};
@@ -63,39 +67,55 @@ thread_local! {
     static SCRATCH: std::cell::RefCell<Vec<Vector3<Real>>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// [`Parameters`] for an energy with one parameter `$name` it is linear in, of value
-/// `self.$field`.
-macro_rules! linear_parameter {
-    ($energy:ty, $name:literal, $field:ident) => {
-        impl Parameters for $energy {
-            fn parameter_names(&self) -> &[&'static str] {
-                &[$name]
-            }
+impl Parameters for crate::Bending {
+    /// `EI` and the rest length (bending is homogeneous of degree −1 in the lengths).
+    fn parameter_names(&self) -> &[&'static str] {
+        &["bending_stiffness", REST_LENGTH]
+    }
 
-            fn add_gradient_derivative(
-                &self,
-                rod: &Rod,
-                name: &str,
-                out: &mut [Vector3<Real>],
-            ) -> Result<bool, CoreError> {
-                match name {
-                    $name => add_linear(self, rod, self.$field, out),
-                    _ => Ok(false),
-                }
-            }
+    fn add_gradient_derivative(
+        &self,
+        rod: &Rod,
+        name: &str,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
+        match name {
+            "bending_stiffness" => add_linear(self, rod, self.stiffness, out),
+            REST_LENGTH => add_homogeneous(self, rod, -1, out),
+            _ => Ok(false),
         }
-    };
+    }
 }
 
-linear_parameter!(crate::Bending, "bending_stiffness", stiffness);
-linear_parameter!(crate::Twisting, "twist_stiffness", stiffness);
+impl Parameters for crate::Twisting {
+    /// `GJ` and the rest length (\\(E = GJ\,\mathrm{Tw}^2/(2L)\\)).
+    fn parameter_names(&self) -> &[&'static str] {
+        &["twist_stiffness", REST_LENGTH]
+    }
+
+    fn add_gradient_derivative(
+        &self,
+        rod: &Rod,
+        name: &str,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
+        match name {
+            "twist_stiffness" => add_linear(self, rod, self.stiffness, out),
+            REST_LENGTH => add_power(self, rod, -1.0, out),
+            _ => Ok(false),
+        }
+    }
+}
 
 impl Parameters for crate::Stretching {
-    /// `EA`; none for an inextensible rod (its stretching is a constraint).
+    /// `EA` and the rest length (homogeneous of degree 1 in the lengths); none for an
+    /// inextensible rod (its stretching is a constraint), no rest length with a rest
+    /// shape (the rest metric is the initial curve's, not the domain's).
     fn parameter_names(&self) -> &[&'static str] {
-        match self.multipliers {
-            Some(_) => &[],
-            None => &["stretch_stiffness"],
+        match (&self.multipliers, self.has_rest_shape()) {
+            (Some(_), _) => &[],
+            (None, true) => &["stretch_stiffness"],
+            (None, false) => &["stretch_stiffness", REST_LENGTH],
         }
     }
 
@@ -109,16 +129,25 @@ impl Parameters for crate::Stretching {
             "stretch_stiffness" if self.multipliers.is_none() => {
                 add_linear(self, rod, self.stiffness, out)
             }
+            REST_LENGTH if self.multipliers.is_none() && !self.has_rest_shape() => {
+                add_homogeneous(self, rod, 1, out)
+            }
             _ => Ok(false),
         }
     }
 }
 
 impl Parameters for crate::Gravity {
-    /// The rod's linear density (its weight `g ρ` per unit length) and the components of
-    /// `g`.
+    /// The rod's linear density (its weight `g ρ` per unit length), the components of
+    /// `g` and the rest length (the weight is \\(\propto L\\)).
     fn parameter_names(&self) -> &[&'static str] {
-        &["linear_density", "gravity[0]", "gravity[1]", "gravity[2]"]
+        &[
+            "linear_density",
+            "gravity[0]",
+            "gravity[1]",
+            "gravity[2]",
+            REST_LENGTH,
+        ]
     }
 
     fn add_gradient_derivative(
@@ -130,6 +159,7 @@ impl Parameters for crate::Gravity {
         let density = rod.material().linear_density;
         let direction = match name {
             "linear_density" => return add_linear(self, rod, density, out),
+            REST_LENGTH => return add_power(self, rod, 1.0, out),
             "gravity[0]" => Vector3::x(),
             "gravity[1]" => Vector3::y(),
             "gravity[2]" => Vector3::z(),
@@ -142,3 +172,50 @@ impl Parameters for crate::Gravity {
         Ok(true)
     }
 }
+
+impl Parameters for crate::Clamp {
+    /// The rest length: \\(C'(s) = C_u/L\\) at a fixed fraction, so at a fixed penalty
+    /// \\(\partial_L\nabla E = -2\nabla E/L\\) (a stiffness that follows `L` is its
+    /// caller's to add).
+    fn parameter_names(&self) -> &[&'static str] {
+        &[REST_LENGTH]
+    }
+
+    fn add_gradient_derivative(
+        &self,
+        rod: &Rod,
+        name: &str,
+        out: &mut [Vector3<Real>],
+    ) -> Result<bool, CoreError> {
+        match name {
+            REST_LENGTH => add_power(self, rod, -2.0, out),
+            _ => Ok(false),
+        }
+    }
+}
+
+/// [`Parameters`] of an energy acting at one material point at a fixed fraction of the
+/// rod, with no length of its own: the rest length leaves its gradient as it is.
+macro_rules! at_a_point {
+    ($energy:ty) => {
+        impl Parameters for $energy {
+            /// The rest length, whose derivative is zero (the point's basis row
+            /// \\(b_i(uL; L) = B_i(u)\\) does not change).
+            fn parameter_names(&self) -> &[&'static str] {
+                &[REST_LENGTH]
+            }
+
+            fn add_gradient_derivative(
+                &self,
+                _rod: &Rod,
+                name: &str,
+                _out: &mut [Vector3<Real>],
+            ) -> Result<bool, CoreError> {
+                Ok(name == REST_LENGTH)
+            }
+        }
+    };
+}
+
+at_a_point!(crate::PointForce);
+at_a_point!(crate::PointSpring);

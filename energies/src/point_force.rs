@@ -52,4 +52,12 @@ impl Energy for PointForce {
     fn bandwidth(&self, _rod: &Rod) -> usize {
         0
     }
+
+    /// Its [`Parameters`](crate::Parameters): the rest length.
+    fn capabilities(&self) -> crate::capabilities::Capabilities<'_> {
+        crate::capabilities::Capabilities {
+            parameters: Some(self),
+            ..crate::capabilities::Capabilities::default()
+        }
+    }
 }

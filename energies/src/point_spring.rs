@@ -84,4 +84,12 @@ impl Energy for PointSpring {
             }
         }
     }
+
+    /// Its [`Parameters`](crate::Parameters): the rest length.
+    fn capabilities(&self) -> crate::capabilities::Capabilities<'_> {
+        crate::capabilities::Capabilities {
+            parameters: Some(self),
+            ..crate::capabilities::Capabilities::default()
+        }
+    }
 }

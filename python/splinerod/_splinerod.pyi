@@ -120,8 +120,10 @@ class Simulation:
     def sensitivities(self, params: Union[str, Sequence[str]], s: _ArrayLike) -> _Points:
         """Derivatives (len(params), len(s), 3) of the points at material coordinates `s`
         (m) with respect to the scene paths `params` (stiffnesses, densities, damping,
-        world.gravity[c], loads[i].force[c], pins[i].position[c], contact.friction): a
-        static scene's equilibrium, or the end of an implicit Euler or BDF2 run."""
+        rod.rest_length, world.gravity[c], loads[i].force[c], pins[i].position[c],
+        contact.friction): a static scene's equilibrium, or the end of an implicit Euler
+        or BDF2 run. A point at `s` m stays `s` m along the rod when the rest length
+        changes, so its derivative by rod.rest_length includes -(s/L) C'(s)."""
     def sensitivity_history(
         self, params: Union[str, Sequence[str]], s: _ArrayLike
     ) -> Tuple[_Points, _Points]:

@@ -103,8 +103,9 @@ def fit(
     params: Union[str, Sequence[str]],
 ) -> FitResult:
     """Fits the parameters ``params`` (scene paths such as ``rod.bending_stiffness``,
-    ``rod.stretch_stiffness``, ``rod.linear_density``, ``pins[0].position[1]``,
-    ``contact.friction``; a list or one comma-separated string) of ``scene`` (a
+    ``rod.stretch_stiffness``, ``rod.linear_density``, ``rod.rest_length``,
+    ``pins[0].position[1]``, ``contact.friction``; a list or one comma-separated
+    string) of ``scene`` (a
     ``Scene``, a dict, a path or TOML text; static, or an implicit Euler or BDF2 run
     observed at step ends by markers, unlabelled points or pin forces) to
     ``observations``: a list whose entries are observation CSV files (paths), CSV text,

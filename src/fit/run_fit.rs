@@ -206,12 +206,25 @@ impl Model for RunFit<'_> {
             set_parameter(&mut self.scene, path, v)?;
         }
         let (scene, observations) = (&self.scene, &self.observations);
+        if crate::sensitivity::rest_length::index_in(&self.paths).is_some() {
+            let marks = observations.iter().filter_map(|o| match o.what {
+                Observed::Marker(s) => Some(s),
+                _ => None,
+            });
+            crate::sensitivity::rest_length::check_markers(scene, marks.reduce(Real::max))?;
+        }
         let paths = if j.is_some() { &self.paths[..] } else { &[] };
+        let rest = crate::sensitivity::rest_length::index_in(paths);
+        let length = scene.rod_spec(0).rest_length;
         let (mut step, mut next) = (0, 0);
         let mut observe = |view: &StepView<'_>| -> Result<(), Error> {
             step += 1;
             while let Some(o) = observations.get(next).filter(|o| o.step == step) {
                 residuals(scene, view, o, (&mut *r, j.as_deref_mut()))?;
+                if let (Observed::Marker(s), Some(k), Some(j)) = (o.what, rest, j.as_deref_mut()) {
+                    let s = scene.material_coordinate(s / length);
+                    marker_rest_length(view.rod, s, o, (k, paths.len()), j)?;
+                }
                 next += 1;
             }
             Ok(())
@@ -260,6 +273,25 @@ fn residuals(
             curve_residuals(view, o, (s, Some(normal)), (r, j))
         }
     }
+}
+
+/// Adds to a marker's Jacobian column `k` of `j` (`n` columns) what `rod.rest_length`
+/// adds: its material coordinate `s` is in metres, so it slides along the rod as `L`
+/// changes (\\(-(s/L)\, C'(s)\\) besides the control points',
+/// `sensitivity/rest_length.rs`).
+fn marker_rest_length(
+    rod: &splinerod_core::Rod,
+    s: Real,
+    o: &RunObservation,
+    (k, n): (usize, usize),
+    j: &mut [Real],
+) -> Result<(), Error> {
+    let mut shift = Vector3::zeros();
+    crate::sensitivity::rest_length::add_metric_shift(rod, s, &mut shift)?;
+    for c in 0..3 {
+        j[(o.first + c) * n + k] -= shift[c] / o.sigma;
+    }
+    Ok(())
 }
 
 /// The residuals of `o` against the curve's point at material coordinate `s`: the

@@ -16,7 +16,7 @@ use crate::fit::closest::closest_point;
 use crate::fit::gradient_free::{nelder_mead, GradientFreeFit};
 use crate::fit::least_squares::{fit, FitReport, Model, ParameterSpace};
 use crate::fit::observations::{ObservationFile, ObservationKind};
-use crate::sensitivity::{parameter_value, set_parameter, static_sensitivities};
+use crate::sensitivity::{parameter_value, rest_length, set_parameter, static_sensitivities};
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
@@ -25,8 +25,8 @@ use splinerod_core::Real;
 pub const SIMULATIONS_PER_PARAMETER: usize = 40;
 
 /// The values of the parameters `paths` in `scene` (where a fit starts), and how each
-/// is fitted: stiffnesses, densities and a positive damping in log space, the others
-/// as they are.
+/// is fitted: stiffnesses, densities, the rest length and a positive damping in log
+/// space, the others as they are.
 pub fn start_and_spaces(
     scene: &Scene,
     paths: &[&str],
@@ -42,6 +42,7 @@ pub fn start_and_spaces(
             log: v > 0.0
                 && (p.ends_with("stiffness")
                     || p.ends_with("linear_density")
+                    || p.ends_with("rest_length")
                     || p.ends_with("damping")),
             bounds: None,
         })
@@ -135,8 +136,13 @@ impl Model for SceneFit<'_> {
         for (path, &v) in self.paths.iter().zip(p) {
             set_parameter(&mut self.scene, path, v)?;
         }
+        if rest_length::index_in(&self.paths).is_some() {
+            let farthest = self.markers.iter().map(|m| m.0).reduce(Real::max);
+            rest_length::check_markers(&self.scene, farthest)?;
+        }
         let found = static_sensitivities(&self.scene, &self.paths)?;
         let n = p.len();
+        let rest = rest_length::index_in(&self.paths);
         let mut j = j;
         for (m, (s, observed, sigma)) in self.markers.iter().enumerate() {
             let row = found.rod.basis_at(*s)?;
@@ -151,7 +157,11 @@ impl Model for SceneFit<'_> {
             }
             if let Some(j) = j.as_deref_mut() {
                 for (k, dq) in found.control_points.iter().enumerate() {
-                    let d = at(dq);
+                    let mut d = at(dq);
+                    if Some(k) == rest {
+                        // A marker's `s` is in metres: it slides along the rod with `L`.
+                        rest_length::add_metric_shift(&found.rod, *s, &mut d)?;
+                    }
                     for c in 0..3 {
                         j[(3 * m + c) * n + k] = -d[c] / sigma;
                     }

@@ -33,7 +33,9 @@ pub fn writhe(rod: &Rod, samples: usize, axes: [Vector3<Real>; 2]) -> Result<Rea
     let start = rod.point(0.0)?;
     points.push(start - axes[0] * (EXTENSION * l));
     for k in 0..samples {
-        points.push(rod.point(l * k as Real / (samples - 1) as Real)?);
+        // `l k / (n − 1)` can round above `l` at the end (l = 1.49925, 25 samples).
+        let s = (l * k as Real / (samples - 1) as Real).min(l);
+        points.push(rod.point(s)?);
     }
     let end = points[points.len() - 1];
     points.push(end + axes[1] * (EXTENSION * l));

@@ -13,7 +13,7 @@
 //! factorisation per step, one solve per parameter); then \\(S_q, S_v\\) follow from the
 //! scheme's update ([`splinerod_integrators::forward`] states every case, BDF2's
 //! two-step base and its implicit-midpoint start included). The start does not depend on
-//! the parameters: \\(S_q = S_v = 0\\) at `t = 0`.
+//! the parameters, \\(S_q = S_v = 0\\) at `t = 0`, except on a rest length it follows.
 //!
 //! **The terms per parameter.** `rod.stretch_stiffness`, `rod.bending_stiffness`,
 //! `rod.twist_stiffness`, `world.gravity[c]`: \\(\partial_p \nabla E\\) from the energies'
@@ -30,6 +30,10 @@
 //! rod starts where it does (\\(S_q(0) = 0\\)), so the first step carries the pinned
 //! point to its moved target. `contact.friction` (μ): the friction potential of the
 //! step's lags is linear in μ, \\(\partial_\mu\nabla D = \nabla D/\mu\\).
+//! `rod.rest_length` (`L`, `sensitivity/rest_length.rs`): every energy's
+//! \\(\partial_L\nabla E\\), a penalty clamp's derived stiffness, \\(M' = M/L\\), and
+//! where the rod's start follows `L` (no `rod.end`) \\(S_q(0) = (q_0 - x_{start})/L\\)
+//! and the pins' targets' rates.
 //!
 //! **What a step freezes at its start.** Friction's lags depend on the state \\(q_n\\)
 //! the step starts from: the anchors \\(q^{start}\\) the slip is measured from, and the
@@ -57,7 +61,7 @@
 //! of one of several `[[rods]]`.
 
 use super::{add_barrier_rate, barrier_rate, energy_rate, target, target_value, Target};
-use super::{by_name, largest, points_at, sample_rows, shared_json, StepView};
+use super::{by_name, largest, points_at, rest_length, sample_rows, shared_json, StepView};
 use crate::scene::Method;
 use crate::{Error, RodSystem, Scene, Simulation};
 use nalgebra::Vector3;
@@ -167,6 +171,12 @@ pub fn observed_sensitivities(
     let mut rates = Rates::new(scene, &sim.system, paths, targets)?;
     let n = sim.system.rod.len();
     let mut states = vec![ForwardState::new(n); paths.len()];
+    for (state, t) in states.iter_mut().zip(&rates.targets) {
+        if matches!(*t, Target::Energy(name, None) if rest_length::is_rest_length(name)) {
+            let start = rest_length::initial_rate(scene, &sim.system.rod);
+            state.positions = start.unwrap_or_else(|| vec![Vector3::zeros(); n]);
+        }
+    }
     let (s, rows) = sample_rows(scene, &sim.system.rod)?;
     let dt = scene.solver.dt.unwrap_or_default();
     let mut times = Vec::with_capacity(scene.step_count());
@@ -312,6 +322,8 @@ struct Rates {
     barrier: Vec<Option<Real>>,
     /// `1/μ` (the density's mass rate).
     inverse_density: Real,
+    /// `1/L` (the rest length's mass rate: \\(M \propto L\\)).
+    inverse_length: Real,
     /// Per parameter and grab, the derivative of the grab's start point.
     grab_from: Vec<Vec<Option<Vector3<Real>>>>,
     /// Per grab, whether it had not started before the step.
@@ -342,6 +354,9 @@ impl Rates {
             let value = target_value(scene, t);
             barrier.push(barrier_rate(system, scene, t, value)?);
             if let Target::Energy(name, segment) = *t {
+                if rest_length::is_rest_length(name) {
+                    rest_length::check_energies(system, path)?;
+                }
                 let found = energy_rate(system, name, segment, &mut probe)?;
                 if !found && name != "linear_density" {
                     let reason = "no energy of the scene depends on it (is it set?)";
@@ -355,6 +370,7 @@ impl Rates {
             targets,
             barrier,
             inverse_density: 1.0 / system.rod.material().linear_density,
+            inverse_length: 1.0 / system.rod.material().rest_length,
             waiting: Vec::with_capacity(system.grabs.len()),
             pin_rates,
             scratch: Vec::with_capacity(system.rod.len()),
@@ -388,6 +404,9 @@ impl Rates {
         match self.targets[k] {
             Target::Energy(name, segment) => {
                 energy_rate(system, name, segment, out)?;
+                if rest_length::is_rest_length(name) {
+                    rest_length::add_derived(system, out);
+                }
             }
             Target::Load(i, c) => {
                 let row = system.rod.basis_at(system.loads[i].force.at)?;
@@ -443,6 +462,7 @@ impl ParameterRates for Rates {
     fn mass_rate(&self, k: usize) -> Real {
         match self.targets[k] {
             Target::Energy("linear_density", None) => self.inverse_density,
+            Target::Energy(name, None) if rest_length::is_rest_length(name) => self.inverse_length,
             _ => 0.0,
         }
     }

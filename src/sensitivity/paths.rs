@@ -7,19 +7,20 @@
 //! `contact.friction` (runs). A pin's position is the held position at `t = 0` (where
 //! the point starts, plus the [`offset`](crate::scene::PinSpec::offset) the parameter
 //! sets); setting it translates the target — of a driven pin its whole `path`, of an
-//! exact clamp its tangent pin too. Refused with the reason: `rod.rest_length` (not
-//! built, see `REST_LENGTH`), per-surface friction (`rod.friction`,
-//! `obstacles[i].friction`, and `contact.friction` while one is set).
+//! exact clamp its tangent pin too. `rod.rest_length` scales the rod's domain with every
+//! material coordinate at its fraction (`sensitivity/rest_length.rs`, which refuses
+//! what it cannot follow). Refused with the reason: `rods[k].rest_length` (see
+//! `REST_LENGTH`), per-surface friction (`rod.friction`, `obstacles[i].friction`, and
+//! `contact.friction` while one is set).
 
 use crate::{Error, Scene};
 use nalgebra::Vector3;
 use splinerod_core::Real;
+use splinerod_energies::rest_length::REST_LENGTH as REST_LENGTH_NAME;
 
-/// Why `rod.rest_length` has no sensitivities yet.
-pub(crate) const REST_LENGTH: &str = "not built: the rest length scales the parametric \
-    domain [0, L], so its derivative changes every energy's rest metric (the mixed \
-    stretching's assumed strain, bending's and twist's 1/L scalings, the contact measure) \
-    and the mass matrix, and no energy gives ∂∇E/∂L through its Parameters yet";
+/// Why a `[[rods]]` entry's rest length has no sensitivities.
+pub(crate) const REST_LENGTH: &str = "not built for one rod of several: it would scale \
+    its segment of the joined rod's domain alone (rod.rest_length of a single rod is)";
 
 /// What a parameter path names.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,6 +72,10 @@ pub(crate) fn target(scene: &Scene, path: &str) -> Result<Target, Error> {
         if !scene.rods.is_empty() {
             return Err(bad(path, "the scene has [[rods]]: name the rod as rods[k]"));
         }
+        if field == "rest_length" {
+            super::rest_length::check_scene(scene, path)?;
+            return Ok(Target::Energy(REST_LENGTH_NAME, None));
+        }
         return rod_target(path, field, None);
     }
     if let Some((k, field)) =
@@ -111,8 +116,8 @@ pub(crate) fn target(scene: &Scene, path: &str) -> Result<Target, Error> {
     }
     Err(bad(
         path,
-        "not a scalar parameter with sensitivities (rod.<stiffness, linear_density or \
-         damping>, rods[k].…, world.gravity[c], loads[i].force[c], pins[i].position[c], \
+        "not a scalar parameter with sensitivities (rod.<stiffness, linear_density, \
+         rest_length or damping>, rods[k].…, world.gravity[c], loads[i].force[c], pins[i].position[c], \
          contact.friction)",
     ))
 }
@@ -257,6 +262,10 @@ pub(crate) fn set(scene: &mut Scene, target: &Target, v: Real) {
                 "bending_stiffness" => rod.bending_stiffness = Some(v),
                 "twist_stiffness" => rod.twist_stiffness = Some(v),
                 "linear_density" => rod.linear_density = v,
+                REST_LENGTH_NAME => {
+                    rod.rest_length = v;
+                    rod.given_rest_length = Some(v);
+                }
                 "gravity[0]" => scene.world.gravity[0] = v,
                 "gravity[1]" => scene.world.gravity[1] = v,
                 _ => scene.world.gravity[2] = v,
@@ -288,6 +297,7 @@ pub(crate) fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
         "bending_stiffness" => rod.bending_stiffness.unwrap_or(0.0),
         "twist_stiffness" => rod.twist_stiffness.unwrap_or(0.0),
         "linear_density" => rod.linear_density,
+        REST_LENGTH_NAME => rod.rest_length,
         "gravity[0]" => scene.world.gravity[0],
         "gravity[1]" => scene.world.gravity[1],
         _ => scene.world.gravity[2],
@@ -297,7 +307,8 @@ pub(crate) fn value(scene: &Scene, name: &str, segment: Option<usize>) -> Real {
 /// Per pin of `pins` (the system's), the derivative of its target by the parameter
 /// `target`: \\(e_c\\) on the pins `[[pins]]` entry `i` moves
 /// ([`Scene::moved_pins`]: its own and an exact clamp's tangent pin) for
-/// `pins[i].position[c]`, zero otherwise (into `out`, resized).
+/// `pins[i].position[c]`; for `rod.rest_length`, the initial shape's (zero unless the
+/// rod's end follows it); zero otherwise (into `out`, resized).
 pub(crate) fn target_rates(
     scene: &Scene,
     pins: &[splinerod_core::Pin],
@@ -306,9 +317,15 @@ pub(crate) fn target_rates(
 ) {
     out.clear();
     out.resize(pins.len(), Vector3::zeros());
-    if let Target::Pin { pin, component, .. } = *target {
-        for p in scene.moved_pins(pins, pin) {
-            out[p][component] = 1.0;
+    match *target {
+        Target::Pin { pin, component, .. } => {
+            for p in scene.moved_pins(pins, pin) {
+                out[p][component] = 1.0;
+            }
         }
+        Target::Energy(REST_LENGTH_NAME, None) => {
+            super::rest_length::pin_rates(scene, pins, out);
+        }
+        _ => {}
     }
 }

@@ -31,23 +31,9 @@ impl Energy for Contact {
     }
 
     fn add_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) {
-        let Ok(mut d) = self.detected(rod) else {
-            gradient
-                .iter_mut()
-                .for_each(|g| *g = Vector3::repeat(Real::NAN));
+        if !self.add_pair_gradient(rod, gradient) {
             return;
-        };
-        // Each pair's force acts on its two samples (see `sample_sums`).
-        let mut sums = std::mem::take(&mut d.sums);
-        sums.clear(d.samples.s.len());
-        for c in &d.pairs {
-            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
-            sums.add_force(c.a, &force);
-            sums.add_force(c.b, &-force);
         }
-        sums.spread_forces(&d.samples, gradient);
-        d.sums = sums;
-        drop(d);
         if self.add_surface_gradient(rod, gradient).is_err() {
             gradient
                 .iter_mut()
@@ -112,6 +98,30 @@ impl Energy for Contact {
 
     fn lifecycle_mut(&mut self) -> Option<&mut dyn Lifecycle> {
         Some(self)
+    }
+}
+
+impl Contact {
+    /// Adds the gradient of the sample pairs' sum (self-contact and contact between
+    /// strands) to `gradient`; without a detection, sets it to NaN and returns false.
+    pub(super) fn add_pair_gradient(&self, rod: &Rod, gradient: &mut [Vector3<Real>]) -> bool {
+        let Ok(mut d) = self.detected(rod) else {
+            gradient
+                .iter_mut()
+                .for_each(|g| *g = Vector3::repeat(Real::NAN));
+            return false;
+        };
+        // Each pair's force acts on its two samples (see `sample_sums`).
+        let mut sums = std::mem::take(&mut d.sums);
+        sums.clear(d.samples.s.len());
+        for c in &d.pairs {
+            let force = c.normal * (self.pair_weight(&d, c) * self.penalty.slope(self.gap(&d, c)));
+            sums.add_force(c.a, &force);
+            sums.add_force(c.b, &-force);
+        }
+        sums.spread_forces(&d.samples, gradient);
+        d.sums = sums;
+        true
     }
 }
 

@@ -107,3 +107,12 @@ impl LaneForm for Stretching {
         self.moment_term(rod)
     }
 }
+
+impl Stretching {
+    /// Whether the rest metric is an initial curve's ([`Stretching::with_rest_shape`])
+    /// rather than the parametrisation's: then the rest length does not enter the
+    /// energy as the domain's length (its parameter derivative is not given).
+    pub(crate) fn has_rest_shape(&self) -> bool {
+        self.rest.is_some()
+    }
+}

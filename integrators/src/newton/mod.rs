@@ -145,6 +145,13 @@ pub trait NewtonProblem {
     fn indefinite_allowed(&self) -> bool {
         false
     }
+    /// Whether a step whose exact matrix factorised indefinite while a remainder needs
+    /// the correction carries the difference to the definite matrix with it ([`carried`]:
+    /// the exact step, quadratic convergence) instead of leaving the remainder out.
+    /// Default false (time steps); static solves say true.
+    fn carries_indefinite(&self) -> bool {
+        false
+    }
     /// Whether a step moving material points by at most `step` (m) ends the solve; the
     /// default compares it with `tolerance` (m).
     fn converged(&self, step: Real, tolerance: Real) -> bool {
@@ -333,7 +340,12 @@ fn newton_direction(
         }
     }
     stats.symbolic_analyses += ws.solver.analyses() - analyses;
-    solve_factored(problem, system, x, ws, stats)
+    if problem.carries_indefinite() {
+        tangent::carry_if_indefinite(problem, system, ws)?;
+    }
+    let slope = solve_factored(problem, system, x, ws, stats);
+    ws.carried.active = false;
+    slope
 }
 
 /// With `A` and the pins factorised, solves the KKT system for the residual `ws.r` and

@@ -74,7 +74,7 @@ pub fn tangents(
 /// correction (which an indefinite factor cannot precondition), switches to the
 /// problem's definite matrix and carries the difference ([`super::carried`]); whether
 /// it did.
-fn carry_if_indefinite(
+pub(super) fn carry_if_indefinite(
     problem: &mut dyn NewtonProblem,
     system: &dyn System,
     ws: &mut NewtonWorkspace,

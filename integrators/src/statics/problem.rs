@@ -135,6 +135,13 @@ impl NewtonProblem for StaticProblem {
         self.kind == HessianKind::Exact
     }
 
+    /// A static solve's steps stay exact where the banded matrix is indefinite and a
+    /// remainder needs the correction (a rope on a sphere): they converge quadratically
+    /// and the solve ends at its tolerance, not short of it.
+    fn carries_indefinite(&self) -> bool {
+        true
+    }
+
     /// A step below the tolerance ends the solve once the regularisation is negligible
     /// (≤ 1e-6 relative: it changes the step, not the fixed point, so it only slows the
     /// convergence; line-search cuts at round-off level keep it from reaching zero).

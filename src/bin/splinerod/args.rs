@@ -52,7 +52,8 @@ pub(crate) enum Command {
         /// The scene (`method = "static"`, `"implicit-euler"` or `"bdf2"`).
         scene: PathBuf,
         /// Parameters by scene path, comma-separated: rod.stretch_stiffness,
-        /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rod.damping
+        /// rod.bending_stiffness, rod.twist_stiffness, rod.linear_density, rod.rest_length
+        /// (the domain scales, material coordinates at their fractions), rod.damping
         /// (runs), rods[k].…, world.gravity[c], loads[i].force[c], pins[i].position[c],
         /// contact.friction (runs).
         #[arg(long, value_name = "P1,P2,…")]
