@@ -21,6 +21,7 @@
 mod bodies;
 mod carried;
 mod curvature;
+mod fallback;
 mod line_search;
 mod tangent;
 
@@ -33,6 +34,7 @@ use crate::{IntegratorError, StepStats, System};
 pub use bodies::BodyForm;
 use bodies::{couple_bodies, set_targets};
 pub(crate) use curvature::negative_curvature;
+use fallback::{indefinite_fallback, Fallback};
 use line_search::{line_search, Trial};
 use nalgebra::Vector3;
 use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
@@ -466,45 +468,4 @@ fn factor_matrix(
             Err(e) => return Err(e),
         }
     }
-}
-
-/// What to do after the Cholesky factorisation failed.
-enum Fallback {
-    /// The indefinite factorisation took the matrix.
-    Factored,
-    /// The problem switched to its definite matrix: assemble and factorise again.
-    Retry,
-    /// Neither: report the failure.
-    Fail,
-}
-
-/// After a failed Cholesky factorisation: the matrix (reassembled if the banded factor
-/// overwrote it) is checked for non-finite entries, factorised by the indefinite `UᵀDU`
-/// if the problem allows and it has no far blocks, or the problem is asked for its
-/// definite matrix.
-fn indefinite_fallback(
-    problem: &mut dyn NewtonProblem,
-    system: &dyn System,
-    ws: &mut NewtonWorkspace,
-) -> Result<Fallback, IntegratorError> {
-    if !ws.solver.matrix_intact() {
-        assemble(problem, system, ws, false);
-    }
-    let (finite, far) = ws
-        .solver
-        .matrix()
-        .map_or((false, false), |m| (m.is_finite(), m.has_far_blocks()));
-    if !finite {
-        return Err(IntegratorError::NonFinite {
-            what: "Newton matrix",
-        });
-    }
-    if problem.indefinite_allowed() && !far && ws.solver.factor_indefinite_assembled().is_ok() {
-        return Ok(Fallback::Factored);
-    }
-    Ok(if problem.on_not_positive_definite() {
-        Fallback::Retry
-    } else {
-        Fallback::Fail
-    })
 }
