@@ -194,6 +194,6 @@ def test_a_pins_position_sensitivities_match_moving_its_path_end():
     fd = (equilibrium(catenary(0.8 + h), s) - equilibrium(catenary(0.8 - h), s)) / (2 * h)
     error = np.abs(d[0] - fd).max() / np.abs(fd).max()
     assert error <= 1e-5, f"relative error {error:.2e}"
-    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rod.rest_length"]:
+    for bad in ["pins[7].position[0]", "pins[0].position[3]", "rod.degree"]:
         with pytest.raises(ValueError, match=bad.replace("[", r"\[").replace("]", r"\]")):
             splinerod.Scene(catenary()).simulation().sensitivities([bad], s)
