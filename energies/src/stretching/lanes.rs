@@ -223,21 +223,40 @@ fn moment_derivatives<const FUSED: bool>(
     for (a, ra) in r[..width].iter_mut().enumerate() {
         *ra = std::array::from_fn(|c| sub(q[3 * (first + a) + c], origin[c]));
     }
-    db[..width].iter_mut().for_each(|d| *d = [ZERO; 3]);
-    for a in 0..width {
-        let row = &g[rows[a]..];
-        let mut sum: [Lanes; 3] =
-            std::array::from_fn(|c| splinerod_core::lanes::mul(r[a][c], row[0]));
-        for b in a + 1..width {
-            let gab = row[b - a];
-            for c in 0..3 {
-                fma::<FUSED>(&mut sum[c], r[b][c], gab);
-                fma::<FUSED>(&mut db[b][c], r[a][c], gab);
-            }
-        }
+    // The first row starts every sum of `db` (no pass zeroing it first).
+    if width > 0 {
+        add_row::<FUSED, true>(0, width, &g[rows[0]..], r, db);
+    }
+    for a in 1..width {
+        add_row::<FUSED, false>(a, width, &g[rows[a]..], r, db);
+    }
+}
+
+/// Row `a` of `G r` (its entries `row` from the diagonal on): `db_a += Σ_{b≥a} G_ab r_b`
+/// and `db_b += G_ab r_a` for `b > a`; with `START`, the sums start here, from zero (the
+/// same bits as adding to stored zeros).
+#[inline(always)]
+fn add_row<const FUSED: bool, const START: bool>(
+    a: usize,
+    width: usize,
+    row: &[Lanes],
+    r: &[[Lanes; 3]; MAX_LANE_WIDTH],
+    db: &mut [[Lanes; 3]; MAX_LANE_WIDTH],
+) {
+    let mut sum: [Lanes; 3] = std::array::from_fn(|c| splinerod_core::lanes::mul(r[a][c], row[0]));
+    for b in a + 1..width {
+        let gab = row[b - a];
         for c in 0..3 {
-            db[a][c] = splinerod_core::lanes::add(db[a][c], sum[c]);
+            fma::<FUSED>(&mut sum[c], r[b][c], gab);
+            if START {
+                db[b][c] = ZERO;
+            }
+            fma::<FUSED>(&mut db[b][c], r[a][c], gab);
         }
+    }
+    for c in 0..3 {
+        let before = if START { ZERO } else { db[a][c] };
+        db[a][c] = splinerod_core::lanes::add(before, sum[c]);
     }
 }
 

@@ -138,6 +138,7 @@ impl LaneEuler {
     /// its pins, the potential `step.potential` whose Hessian has block bandwidth
     /// `step.bandwidth`; the results are read with [`Self::outcome`].
     pub fn step(&mut self, step: &LaneStep<'_>) -> Result<(), LaneFallback> {
+        self.end_kept_run();
         self.dispatch(step, Keep::No)
     }
 
