@@ -12,7 +12,7 @@
 use crate::banded_cholesky::{inverse_factor, PivotArith};
 use crate::IntegratorError;
 use splinerod_core::lanes::{LaneBlock, ZERO};
-use splinerod_core::{BlockBanded, LaneBand, Real};
+use splinerod_core::{BlockBanded, LaneBand};
 pub use splinerod_core::{Lanes, LANES};
 
 /// A 3×3 block per lane, column-major: entry `(r, c)` at `3c + r`.
@@ -235,30 +235,50 @@ fn times<const FUSED: bool>(l: &Block, m: &Block) -> Block {
     out
 }
 
+/// Lane by lane, as plain loops over the lanes (which vectorise; array `map` and
+/// closures did not, and left the pivots as scalar code).
 impl PivotArith for Lanes {
     #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        std::array::from_fn(|l| self[l] * b[l])
+    fn mul(mut self, b: Self) -> Self {
+        for l in 0..LANES {
+            self[l] *= b[l];
+        }
+        self
     }
     #[inline(always)]
-    fn add(self, b: Self) -> Self {
-        std::array::from_fn(|l| self[l] + b[l])
+    fn add(mut self, b: Self) -> Self {
+        for l in 0..LANES {
+            self[l] += b[l];
+        }
+        self
     }
     #[inline(always)]
-    fn sub(self, b: Self) -> Self {
-        std::array::from_fn(|l| self[l] - b[l])
+    fn sub(mut self, b: Self) -> Self {
+        for l in 0..LANES {
+            self[l] -= b[l];
+        }
+        self
     }
     #[inline(always)]
-    fn div(self, b: Self) -> Self {
-        std::array::from_fn(|l| self[l] / b[l])
+    fn div(mut self, b: Self) -> Self {
+        for l in 0..LANES {
+            self[l] /= b[l];
+        }
+        self
     }
     #[inline(always)]
-    fn sqrt(self) -> Self {
-        self.map(Real::sqrt)
+    fn sqrt(mut self) -> Self {
+        for l in 0..LANES {
+            self[l] = self[l].sqrt();
+        }
+        self
     }
     #[inline(always)]
-    fn neg(self) -> Self {
-        self.map(|x| -x)
+    fn neg(mut self) -> Self {
+        for l in 0..LANES {
+            self[l] = -self[l];
+        }
+        self
     }
     #[inline(always)]
     fn one() -> Self {
@@ -275,10 +295,21 @@ impl PivotArith for Lanes {
 fn inverse_cholesky(s: &Block, ok: &mut [bool; LANES]) -> Block {
     let ([a, m10, m20, b, m21, c], minors) = inverse_factor([s[0], s[1], s[2], s[4], s[5], s[8]]);
     let mut out = [a, m10, m20, ZERO, b, m21, ZERO, ZERO, c];
-    for (l, ok) in ok.iter_mut().enumerate() {
-        let definite = minors.iter().all(|m| m[l] > 0.0);
-        if !*ok || !definite || !out.iter().all(|x| x[l].is_finite()) {
-            *ok = false;
+    // Per lane: definite and finite (plain loops over the lanes, which vectorise).
+    let mut good = *ok;
+    for m in &minors {
+        for l in 0..LANES {
+            good[l] &= m[l] > 0.0;
+        }
+    }
+    for x in &out {
+        for l in 0..LANES {
+            good[l] &= x[l].is_finite();
+        }
+    }
+    if good != [true; LANES] {
+        for l in (0..LANES).filter(|&l| !good[l]) {
+            ok[l] = false;
             for (e, v) in out
                 .iter_mut()
                 .zip([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])

@@ -6,7 +6,7 @@
 use super::table::TensionTable;
 use super::Stretching;
 use crate::lanes::{LaneField, LaneTerm};
-use splinerod_core::lanes::{fma, sub, ZERO};
+use splinerod_core::lanes::{fma, sub, LaneBlock, ZERO};
 use splinerod_core::{Derivatives, LaneBand, Lanes, QuadratureTable, Real, Rod, LANES};
 
 /// Widest function block a lane evaluation takes: `2d` for degree 5.
@@ -223,26 +223,46 @@ fn moment_derivatives<const FUSED: bool>(
     for (a, ra) in r[..width].iter_mut().enumerate() {
         *ra = std::array::from_fn(|c| sub(q[3 * (first + a) + c], origin[c]));
     }
-    db[..width].iter_mut().for_each(|d| *d = [ZERO; 3]);
-    for a in 0..width {
-        let row = &g[rows[a]..];
-        let mut sum: [Lanes; 3] =
-            std::array::from_fn(|c| splinerod_core::lanes::mul(r[a][c], row[0]));
-        for b in a + 1..width {
-            let gab = row[b - a];
-            for c in 0..3 {
-                fma::<FUSED>(&mut sum[c], r[b][c], gab);
-                fma::<FUSED>(&mut db[b][c], r[a][c], gab);
-            }
-        }
+    // The first row starts every sum of `db` (no pass zeroing it first).
+    if width > 0 {
+        add_row::<FUSED, true>(0, width, &g[rows[0]..], r, db);
+    }
+    for a in 1..width {
+        add_row::<FUSED, false>(a, width, &g[rows[a]..], r, db);
+    }
+}
+
+/// Row `a` of `G r` (its entries `row` from the diagonal on): `db_a += Σ_{b≥a} G_ab r_b`
+/// and `db_b += G_ab r_a` for `b > a`; with `START`, the sums start here, from zero (the
+/// same bits as adding to stored zeros).
+#[inline(always)]
+fn add_row<const FUSED: bool, const START: bool>(
+    a: usize,
+    width: usize,
+    row: &[Lanes],
+    r: &[[Lanes; 3]; MAX_LANE_WIDTH],
+    db: &mut [[Lanes; 3]; MAX_LANE_WIDTH],
+) {
+    let mut sum: [Lanes; 3] = std::array::from_fn(|c| splinerod_core::lanes::mul(r[a][c], row[0]));
+    for b in a + 1..width {
+        let gab = row[b - a];
         for c in 0..3 {
-            db[a][c] = splinerod_core::lanes::add(db[a][c], sum[c]);
+            fma::<FUSED>(&mut sum[c], r[b][c], gab);
+            if START {
+                db[b][c] = ZERO;
+            }
+            fma::<FUSED>(&mut db[b][c], r[a][c], gab);
         }
+    }
+    for c in 0..3 {
+        let before = if START { ZERO } else { db[a][c] };
+        db[a][c] = splinerod_core::lanes::add(before, sum[c]);
     }
 }
 
 /// Adds \\(c\, \partial b_a \partial b_b^T + \lambda (G_k)_{ab} I\\) at blocks
-/// `(first + a, first + b)`, `a ≤ b`, lane by lane.
+/// `(first + a, first + b)`, `a ≤ b`, lane by lane ([`LaneBand::row_to_add`]: a block
+/// not written yet is written, from zero).
 #[inline(always)]
 fn add_function_blocks<const FUSED: bool>(
     hessian: &mut LaneBand,
@@ -255,23 +275,39 @@ fn add_function_blocks<const FUSED: bool>(
 ) {
     for (a, va) in db.iter().enumerate() {
         let u: [Lanes; 3] = std::array::from_fn(|k| splinerod_core::lanes::mul(va[k], c));
-        let row = hessian.row_mut(first + a);
-        for ((block, vb), gab) in row.iter_mut().zip(&db[a..]).zip(&g[rows[a]..]) {
-            // The block summed in registers and stored once (a store followed by a
-            // partial reload of the same entry stalls the store forwarding).
-            let mut sum = *block;
-            for (col, vc) in vb.iter().enumerate() {
-                for (r, ur) in u.iter().enumerate() {
-                    fma::<FUSED>(&mut sum[3 * col + r], *ur, *vc);
-                }
-            }
-            let d = splinerod_core::lanes::mul(lambda, *gab);
-            for e in [0, 4, 8] {
-                sum[e] = splinerod_core::lanes::add(sum[e], d);
-            }
-            *block = sum;
+        let (row, held) = hessian.row_to_add(first + a, db.len() - a);
+        let mut blocks = row.iter_mut().zip(&db[a..]).zip(&g[rows[a]..]);
+        for ((block, vb), gab) in blocks.by_ref().take(held) {
+            *block = block_sum::<FUSED>(*block, &u, vb, lambda, *gab);
+        }
+        // Blocks the band holds no value in yet: from zero.
+        for ((block, vb), gab) in blocks {
+            *block = block_sum::<FUSED>([ZERO; 9], &u, vb, lambda, *gab);
         }
     }
+}
+
+/// `sum + u vᵀ + λ g I` for one block, lane by lane (summed in registers and stored
+/// once by the caller: a store followed by a partial reload of the same entry stalls
+/// the store forwarding).
+#[inline(always)]
+fn block_sum<const FUSED: bool>(
+    mut sum: LaneBlock,
+    u: &[Lanes; 3],
+    v: &[Lanes; 3],
+    lambda: Lanes,
+    g: Lanes,
+) -> LaneBlock {
+    for (col, vc) in v.iter().enumerate() {
+        for (r, ur) in u.iter().enumerate() {
+            fma::<FUSED>(&mut sum[3 * col + r], *ur, *vc);
+        }
+    }
+    let d = splinerod_core::lanes::mul(lambda, g);
+    for e in [0, 4, 8] {
+        sum[e] = splinerod_core::lanes::add(sum[e], d);
+    }
+    sum
 }
 
 #[cfg(test)]

@@ -106,6 +106,11 @@ impl LaneEuler {
         Ok(((&k.start_q[l], &k.start_v[l]), outcome))
     }
 
+    /// Ends the run of kept steps (a step not kept overwrites the lanes' state).
+    pub(super) fn end_kept_run(&mut self) {
+        self.kept.complete = false;
+    }
+
     /// The per-step start of a kept step after the first: the Newton iterate and each
     /// lane's tracker start again from the lanes' state ([`Self::gather`]'s last lines).
     #[inline(always)]
@@ -113,7 +118,7 @@ impl LaneEuler {
         for (tracker, rod) in self.trackers.iter_mut().zip(rods) {
             *tracker = ConvergenceTracker::new(params, rod.material().rest_length);
         }
-        self.x.copy_from_slice(&self.v0);
+        // x = v₀ already: the last kept step left both its end velocity (`keep_end`).
     }
 
     /// The end of a kept step: each lane's end state checked finite (as
@@ -138,7 +143,7 @@ impl LaneEuler {
         k.v0.resize(self.v0.len(), ZERO);
         std::mem::swap(&mut k.q0, &mut self.q0);
         std::mem::swap(&mut self.q0, &mut self.trial);
-        k.v0.copy_from_slice(&self.v0);
+        std::mem::swap(&mut k.v0, &mut self.v0);
         self.v0.copy_from_slice(&self.x);
         k.multipliers.clone_from(&self.multipliers);
         (k.stats, k.dt, k.complete, k.valid) = (self.stats, dt, true, true);

@@ -138,6 +138,7 @@ impl LaneEuler {
     /// its pins, the potential `step.potential` whose Hessian has block bandwidth
     /// `step.bandwidth`; the results are read with [`Self::outcome`].
     pub fn step(&mut self, step: &LaneStep<'_>) -> Result<(), LaneFallback> {
+        self.end_kept_run();
         self.dispatch(step, Keep::No)
     }
 
@@ -355,7 +356,8 @@ impl LaneEuler {
             *q = std::array::from_fn(|l| q0[l] + x[l] * dt);
         }
         self.bw = bandwidth;
-        self.a.reset(self.n, bandwidth);
+        // Blocks the potential does not write are zeroed by the mass pass below.
+        self.a.clear_lazily(self.n, bandwidth);
         self.gradient.fill(ZERO);
         let mut energy = ZERO;
         let derivatives = Derivatives {
@@ -377,9 +379,10 @@ impl LaneEuler {
                 r[l] += g[l] * dt;
             }
         }
-        let w = self.mass_bw + 1;
+        let (w, stride) = (self.mass_bw + 1, bandwidth + 1);
+        let blocks = self.a.blocks_mut();
         for i in 0..self.n {
-            let row = self.a.row_mut(i);
+            let row = &mut blocks[i * stride..i * stride + stride.min(self.n - i)];
             for (k, m) in self.mass[i * w..(i + 1) * w]
                 .iter()
                 .enumerate()

@@ -86,7 +86,17 @@ impl LaneEuler {
         self.saved.resize(self.pins.len() * width, [ZERO; 9]);
         for (e, &k) in self.pins.iter().enumerate() {
             for j in k.saturating_sub(bw)..(k + bw + 1).min(n) {
-                self.saved[e * width + j + bw - k] = self.a.block(j, k);
+                let saved = &mut self.saved[e * width + j + bw - k];
+                // Entry by entry, the lower blocks transposed (no block copied whole
+                // through a temporary: a library call each).
+                let (stored, transposed) = match j <= k {
+                    true => (&self.a.row(j)[k - j], false),
+                    false => (&self.a.row(k)[j - k], true),
+                };
+                for (e, entry) in saved.iter_mut().enumerate() {
+                    let (r, c) = (e % 3, e / 3);
+                    *entry = stored[if transposed { 3 * r + c } else { e }];
+                }
             }
         }
         let mut identity = [ZERO; 9];
