@@ -274,3 +274,26 @@ fn bad_bodies_are_refused_naming_the_field() {
         assert_field(&line, field);
     }
 }
+
+#[test]
+fn a_clamp_a_body_holds_cannot_be_posed() {
+    let scene = Scene::from_toml(&pendulum_with("", "")).expect("scene");
+    let mut system = scene.build_system().expect("system");
+    let k = system
+        .grippers
+        .iter()
+        .position(|g| g.pin == 1)
+        .expect("gripper");
+    let pose = splinerod::world::gripper::Pose::from_rotation_vector(
+        nalgebra::Vector3::new(0.1, 0.0, 0.0),
+        nalgebra::Vector3::zeros(),
+        &system.grippers[k].axis,
+    );
+    let before = system.pins.clone();
+    let e = system
+        .set_gripper_pose(k, pose)
+        .expect_err("the body holds it");
+    assert_eq!(e.field_name(), Some("pins[1].body"));
+    assert!(e.to_string().contains("bob"), "{e}");
+    assert_eq!(system.pins, before, "nothing moved");
+}
