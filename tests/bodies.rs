@@ -419,3 +419,26 @@ fn bodies_come_to_rest_on_the_floor_on_their_contact_shapes() {
     println!("sphere, static: rests at {y:.12} m");
     assert!((y - 0.099).abs() < 1e-9, "{y}");
 }
+
+#[test]
+fn a_clamp_a_body_holds_cannot_be_posed() {
+    let scene = Scene::from_toml(&pendulum_with("", "")).expect("scene");
+    let mut system = scene.build_system().expect("system");
+    let k = system
+        .grippers
+        .iter()
+        .position(|g| g.pin == 1)
+        .expect("gripper");
+    let pose = splinerod::world::gripper::Pose::from_rotation_vector(
+        nalgebra::Vector3::new(0.1, 0.0, 0.0),
+        nalgebra::Vector3::zeros(),
+        &system.grippers[k].axis,
+    );
+    let before = system.pins.clone();
+    let e = system
+        .set_gripper_pose(k, pose)
+        .expect_err("the body holds it");
+    assert_eq!(e.field_name(), Some("pins[1].body"));
+    assert!(e.to_string().contains("bob"), "{e}");
+    assert_eq!(system.pins, before, "nothing moved");
+}

@@ -283,3 +283,54 @@ fn bad_paths_and_options_are_refused() {
     let e = UsdWriter::new(Path::new("x.usda"), 0).expect_err("every 0");
     assert_eq!(e.field_name(), Some("--every"));
 }
+
+#[test]
+fn a_body_is_a_transformed_prim_at_its_json_pose() {
+    let toml = std::fs::read_to_string("scenes/body_pendulum.toml").expect("scene");
+    let scene = Scene::from_toml(&toml.replace("duration = 4.3", "duration = 0.5"));
+    let scene = scene.expect("scene");
+    let dir = std::env::temp_dir().join(format!("splinerod-usd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("body.usda");
+    let mut writer = UsdWriter::new(&path, 1).expect("writer");
+    let result = splinerod::run_observed(&scene, &mut [&mut writer]).expect("run");
+    let text = std::fs::read_to_string(&path).expect("written");
+    std::fs::remove_file(&path).ok();
+    let bob = prim(&text, "Xform", "bob");
+    assert!(bob.contains(&"            custom string splinerod:kind = \"body\""));
+    assert!(bob.contains(&"            custom double splinerod:mass = 2"));
+    let translate = samples(&bob, "double3 xformOp:translate");
+    let orient = samples(&bob, "quatd xformOp:orient");
+    let track = &result.bodies[0];
+    assert_eq!(translate.len(), track.t.len());
+    assert_eq!(
+        orient.keys().collect::<Vec<_>>(),
+        translate.keys().collect::<Vec<_>>()
+    );
+    let (mut moved, mut turned): (Real, Real) = (0.0, 0.0);
+    for (k, code) in translate.keys().enumerate() {
+        let x: Vec<Real> = numbers(translate[code]);
+        let q: Vec<Real> = numbers(orient[code]);
+        let rv = nalgebra::Vector3::from(track.orientation[k]);
+        let e = nalgebra::UnitQuaternion::from_scaled_axis(rv);
+        let sign = if e.w * q[0] < 0.0 { -1.0 } else { 1.0 };
+        let e = [e.w, e.i, e.j, e.k].map(|c| sign * c);
+        for i in 0..3 {
+            moved = moved.max((x[i] - track.position[k][i]).abs());
+        }
+        for i in 0..4 {
+            turned = turned.max((q[i] - e[i]).abs());
+        }
+    }
+    println!("body: translate − JSON position {moved:e} m, orient − JSON rotation {turned:e}");
+    assert!(moved <= 1e-12 && turned <= 1e-12);
+    let shape = prim(&text, "Cube", "shape");
+    // The box of I = 0.01 kg m² about every axis for 2 kg: sides √(6·0.01/2).
+    let scale = shape
+        .iter()
+        .find_map(|l| l.trim().strip_prefix("double3 xformOp:scale = "));
+    let sides: Vec<Real> = numbers(scale.expect("scaled"));
+    assert!(sides
+        .iter()
+        .all(|s| (s - (0.03 as Real).sqrt()).abs() < 1e-15));
+}

@@ -112,6 +112,12 @@ class Simulation:
     def pin_forces(self) -> _Points: ...
     @property
     def pin_torques(self) -> _Points: ...
+    @property
+    def bodies(self) -> list[Dict[str, Any]]:
+        """Member 0's rigid bodies now: dicts with `name`, `mass` (kg), `inertia`
+        ((3, 3), kg m², body frame), `position` (centre of mass, m), `orientation`
+        (rotation vector, rad), `velocity` (m/s), `angular_velocity` (rad/s, world
+        frame); the arrays as the JSON's `bodies[i]` records them."""
     @overload
     def positions(self, s: float, member: int = 0) -> _Points: ...
     @overload

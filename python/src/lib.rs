@@ -10,6 +10,7 @@
 
 mod adaptivity;
 mod arrays;
+mod bodies;
 mod bundled;
 mod calibration;
 mod driver;

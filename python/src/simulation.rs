@@ -320,6 +320,14 @@ impl Simulation {
         ))
     }
 
+    /// Member 0's rigid bodies (`[[bodies]]`) now: a list of dicts with `name`, `mass`,
+    /// `inertia`, `position`, `orientation` (rotation vector), `velocity` and
+    /// `angular_velocity` (numpy arrays, as the JSON's `bodies[i]` last entries).
+    #[getter]
+    fn bodies<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        crate::bodies::bodies(py, &self.driver.sims()[0])
+    }
+
     /// Material points at coordinates `s` (m, a number or a 1-D array) of `member`:
     /// `(3,)` for a number, `(k, 3)` for an array.
     #[pyo3(signature = (s, member = 0))]

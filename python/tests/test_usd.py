@@ -1,7 +1,8 @@
 """`splinerod run --usd OUT.usda` read back with usd-core (`pxr`): the prims, their
 types and attributes, and at every time sample the exact control points against the
 run's JSON (probes at every step, samples at the end) within 1e-12 m and against the
-Python session's control points; the float `points` are the exact ones rounded once.
+Python session's control points; the float `points` are the exact ones rounded once;
+a rigid body's Xform at the JSON's `bodies[0]` pose at every sample within 1e-12.
 Skipped without `pxr` (CI installs usd-core)."""
 
 import json
@@ -443,3 +444,43 @@ def test_why_points_are_float(tmp_path):
     errors = validation_errors(stage)
     if errors:  # usd-core with UsdValidation (24.08 on)
         assert any(e.startswith("AttributeTypeMismatch") for e in errors)
+
+
+def rotation_vector_quaternion(r):
+    """The unit quaternion (w, x, y, z) of the rotation vector `r`."""
+    angle = np.linalg.norm(r)
+    axis = r / angle if angle > 0 else np.zeros(3)
+    return np.array([math.cos(angle / 2), *(math.sin(angle / 2) * axis)])
+
+
+def test_a_body_is_an_xform_at_its_json_pose(cli, tmp_path):
+    scene = splinerod.bundled_scene("body_pendulum").toml
+    stage, result, _ = run(cli, tmp_path, scene)
+    assert validation_errors(stage) == []
+    prim = stage.GetPrimAtPath("/World/Bodies/bob")
+    assert prim.IsA(UsdGeom.Xformable) and prim.GetTypeName() == "Xform"
+    assert prim.GetAttribute("splinerod:kind").Get() == "body"
+    assert prim.GetAttribute("splinerod:name").Get() == "bob"
+    assert prim.GetAttribute("splinerod:mass").Get() == 2.0
+    assert np.array_equal(np.array(prim.GetAttribute("splinerod:inertia").Get()), 0.01 * np.eye(3))
+    track = result["bodies"][0]
+    times = stage.GetPrimAtPath("/World").GetAttribute("splinerod:time")
+    orient = prim.GetAttribute("xformOp:orient")
+    codes = orient.GetTimeSamples()
+    assert len(codes) == len(track["t"]) == 861
+    moved = turned = 0.0
+    for code, t, x, r in zip(codes, track["t"], track["position"], track["orientation"]):
+        assert times.Get(code) == t
+        m = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(code)
+        moved = max(moved, np.abs(np.array(m.ExtractTranslation()) - x).max())
+        q = orient.Get(code)
+        q = np.array([q.GetReal(), *q.GetImaginary()])
+        e = rotation_vector_quaternion(np.array(r))
+        turned = max(turned, min(np.abs(q - e).max(), np.abs(q + e).max()))
+    assert moved <= EXACT and turned <= EXACT
+    shape = stage.GetPrimAtPath("/World/Bodies/bob/shape")
+    assert shape.GetTypeName() == "Cube" and UsdGeom.Cube(shape).GetSizeAttr().Get() == 1.0
+    # The box of I = 0.01 kg m² about every axis for 2 kg: sides √(6 · 0.01 / 2).
+    side = np.array(shape.GetAttribute("xformOp:scale").Get())
+    assert np.allclose(side, math.sqrt(0.03), rtol=1e-15, atol=0)
+    print(f"\nbody: translate {moved:.3g} m, orient {turned:.3g} from the JSON")

@@ -271,13 +271,26 @@ impl crate::RodSystem {
 
     /// Puts gripper `k` in `pose` (its pins and the energies measured against its
     /// clamp frame), from the next step on; a gripper with a pose path is moved by it
-    /// again at the next step. An error naming `index` if there is no gripper `k`.
+    /// again at the next step. An error naming `index` if there is no gripper `k`, and
+    /// `pins[i].body` if a rigid body holds its clamp (the body moves it).
     pub fn set_gripper_pose(&mut self, k: usize, pose: Pose) -> Result<(), Error> {
         let count = self.grippers.len();
         let Some(gripper) = self.grippers.get_mut(k) else {
             let reason = format!("the system has {count} gripper(s)");
             return Err(Error::field("index", k, reason));
         };
+        let held =
+            |a: &&splinerod_core::Attachment| a.pin == gripper.pin || a.pin == gripper.tangent;
+        if let Some(a) = self.bodies.attachments.iter().find(held) {
+            let name = self.bodies.names.get(a.body).map_or("?", String::as_str);
+            let reason =
+                "a rigid body holds this clamp: its pose follows the body, it cannot be set";
+            return Err(Error::field(
+                format!("pins[{}].body", gripper.pin),
+                name,
+                reason,
+            ));
+        }
         gripper.apply(pose, &mut self.pins, &mut self.energies);
         Ok(())
     }

@@ -54,6 +54,11 @@
 //! an obstacle with a `path`; then `quatd xformOp:orient`. Ensembles: member 0, as
 //! every output.
 //!
+//! **Bodies** (`/World/Bodies`, only for a scene with `[[bodies]]`): an `Xform` per
+//! body with its centre of mass (`double3 xformOp:translate`) and orientation (`quatd
+//! xformOp:orient`) time-sampled at every recorded code, its mass and inertia exactly,
+//! and a child `shape` showing it: the box of its principal moments (see [`bodies`]).
+//!
 //! `points` is `point3f[]` because the schema says so: a layer with `point3d[] points`
 //! opens, and `UsdGeom.BasisCurves(prim).GetPointsAttr().Get(t)` returns the doubles
 //! in Python, but usd-core's validation reports `AttributeTypeMismatch` and typed reads
@@ -64,12 +69,14 @@
 //! then renamed: a run that fails leaves no file claiming to be complete. A
 //! checkpoint carries the samples so far.
 
+mod bodies;
 mod curves;
 mod shapes;
 mod text;
 
 use crate::run::observe::{Frame, Observer};
 use crate::{Error, RunResult, Scene, StepReport};
+use bodies::{BodyStreams, BodyStyle};
 use curves::{Layout, Piece, RodStreams, Style};
 use serde::{Deserialize, Serialize};
 use shapes::Shape;
@@ -90,6 +97,7 @@ pub struct UsdWriter {
     every: usize,
     rods: Vec<Style>,
     shapes: Vec<Shape>,
+    bodies: Vec<BodyStyle>,
     recorded: Recorded,
     pieces: Vec<Piece>,
     done: bool,
@@ -108,6 +116,9 @@ struct Recorded {
     moves: Vec<String>,
     /// Per shape, half the side of a plane's square (set at the start).
     half_sides: Vec<Real>,
+    /// Per body, its pose's samples.
+    #[serde(default)]
+    bodies: Vec<BodyStreams>,
     /// The step recorded last by [`Observer::step`].
     last_step: Option<usize>,
 }
@@ -136,6 +147,7 @@ impl UsdWriter {
             every,
             rods: Vec::new(),
             shapes: Vec::new(),
+            bodies: Vec::new(),
             recorded: Recorded::default(),
             pieces: Vec::new(),
             done: false,
@@ -156,6 +168,7 @@ impl UsdWriter {
     fn set_up(&mut self, frame: &Frame<'_>) {
         self.rods = styles(frame.scene, &frame.system.rod);
         self.shapes = shapes::of_scene(frame.scene);
+        self.bodies = bodies::styles(frame.system);
     }
 
     /// A fresh record: empty samples, the planes' size from the rods' start.
@@ -166,6 +179,7 @@ impl UsdWriter {
         self.recorded = Recorded {
             rods: vec![RodStreams::default(); self.rods.len()],
             moves: vec![String::new(); self.shapes.len()],
+            bodies: vec![BodyStreams::default(); self.bodies.len()],
             half_sides: (self.shapes.iter())
                 .map(|s| s.half_side(total, &centre))
                 .collect(),
@@ -200,6 +214,9 @@ impl UsdWriter {
                 Shape::record(moves, o, code).map_err(fmt_error)?;
             }
         }
+        for (streams, body) in r.bodies.iter_mut().zip(&frame.system.bodies.bodies) {
+            streams.record(body, code).map_err(fmt_error)?;
+        }
         Ok(())
     }
 
@@ -226,9 +243,15 @@ impl UsdWriter {
                 *half,
             )?;
         }
-        // Rigid bodies, when scenes have them, follow here: `def Scope "Bodies"` with an
-        // Xform per body, its translate and orient time-sampled (see `shapes`).
-        writeln!(out, "    }}\n}}")?;
+        writeln!(out, "    }}")?;
+        if !self.bodies.is_empty() {
+            writeln!(out, "\n    def Scope \"Bodies\"\n    {{")?;
+            for (style, streams) in self.bodies.iter().zip(&r.bodies) {
+                style.write(&mut out, streams)?;
+            }
+            writeln!(out, "    }}")?;
+        }
+        writeln!(out, "}}")?;
         Ok(out)
     }
 
@@ -407,7 +430,8 @@ impl Observer for UsdWriter {
         self.recorded = serde_json::from_str(state.ok_or_else(bad)?)?;
         let fits = self.recorded.rods.len() == self.rods.len()
             && self.recorded.moves.len() == self.shapes.len()
-            && self.recorded.half_sides.len() == self.shapes.len();
+            && self.recorded.half_sides.len() == self.shapes.len()
+            && self.recorded.bodies.len() == self.bodies.len();
         if !fits {
             return Err(bad());
         }

@@ -17,9 +17,8 @@
 //! `capsule`) and its scene geometry exactly (`splinerod:normal`, `splinerod:b` at the
 //! start).
 //!
-//! Rigid bodies, when the scene has them, belong next to these: an `Xform` per body
-//! under `/World/Bodies` with the same two ops time-sampled (its centre of mass and
-//! orientation), its contact shapes as child prims (see `write_transform`).
+//! Rigid bodies are written next to these, under `/World/Bodies`, with the same two ops
+//! time-sampled (their centre of mass and orientation; see `super::bodies`).
 
 use super::text::{quoted, tuple, Num, ATTRIBUTE, SAMPLE};
 use crate::Scene;
