@@ -9,7 +9,7 @@
 //! \\(x + R r\\). A welded end (an exact clamp) attaches both of the clamp's pins, the
 //! tangent pin sliding along the body-fixed axis \\(R a_b\\).
 //!
-//! Rotations are updated by the exponential map, \\(R^+ = \exp([\beta w]_\times) \hat R\\);
+//! Rotations are updated by the exponential map, \\(R^+ = \exp(\[\beta w\]_\times) \hat R\\);
 //! its differential is the left Jacobian of SO(3) ([`left_jacobian`]):
 //! \\(\exp([\phi + \delta\phi]_\times) = \exp([T(\phi)\,\delta\phi]_\times)\exp([\phi]_\times)
 //! + O(\delta\phi^2)\\).
@@ -159,7 +159,7 @@ pub struct Attachment {
     pub axis: Option<Vector3<Real>>,
 }
 
-/// The cross-product matrix \\([a]_\times\\): \\([a]_\times b = a \times b\\).
+/// The cross-product matrix \\(\[a\]_\times\\): \\(\[a\]_\times b = a \times b\\).
 pub fn skew(a: &Vector3<Real>) -> Matrix3<Real> {
     Matrix3::new(0.0, -a.z, a.y, a.z, 0.0, -a.x, -a.y, a.x, 0.0)
 }

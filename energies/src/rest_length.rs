@@ -1,4 +1,4 @@
-//! Derivatives by the rest length `L` (the parameter `"rest_length"` of [`Parameters`],
+//! Derivatives by the rest length `L` (the parameter `"rest_length"` of [`Parameters`](crate::parameters::Parameters),
 //! issue #48): the rod's parametric domain is `[0, L]` with its knots, quadrature
 //! weights and every material coordinate of the scene at fixed fractions of it, so for
 //! fixed control points `q` a point at the fraction `u` stays where it is

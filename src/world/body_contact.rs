@@ -1,6 +1,6 @@
 //! Bodies resting on the floor and on obstacles: contact spheres and capsules declared
 //! on a body ([`BodyShape`]), frictionless, by a penalty in the body's own potential
-//! ([`System::add_body_potential`], solved in the same Newton system).
+//! ([`System::add_body_potential`](splinerod_integrators::System::add_body_potential), solved in the same Newton system).
 //!
 //! A shape is a body-fixed segment `a`–`b` (a sphere when `a = b`) of radius `r`. Against
 //! a surface (the floor or an `[[obstacles]]` entry, [`Obstacle::distance`]) its gap is
@@ -11,7 +11,7 @@
 //! \\[ E = \tfrac12 k\, \min(g, 0)^2, \qquad \nabla_x E = k g\, n, \qquad
 //! \nabla_\theta E = (p - x)\times (k g\, n), \\]
 //!
-//! with the Hessian \\(k\, J^T J\\), \\(J = [\,n^T,\ ((p - x)\times n)^T\,]\\) (the
+//! with the Hessian \\(k\, J^T J\\), \\(J = \[\,n^T,\ ((p - x)\times n)^T\,\]\\) (the
 //! surface's and the segment's curvature left out: definite). The stiffness of a body is
 //! chosen, not asked: its weight (at least under 9.81 m/s²) on one shape sinks it by 1 %
 //! of its smallest radius, \\(k = M \max(|g|, 9.81) / (0.01\, r_{min})\\).

@@ -1,13 +1,13 @@
 //! Rigid bodies in the Newton system: a bordered KKT system, reduced onto the pins.
 //!
 //! A body's unknown is \\(y = (u, w)\\): its pose during the solve is
-//! \\(x = \hat x + s\,u\\), \\(R = \exp([s\,w]_\times)\hat R\\) with `s = β` for a time
+//! \\(x = \hat x + s\,u\\), \\(R = \exp(\[s\,w\]_\times)\hat R\\) with `s = β` for a time
 //! step (`u`, `w` are then the velocity and angular velocity at the step's end) and
 //! `s = 1` for a static solve. A pin held by the body at its body-fixed point `r` has
 //! the target \\(p(y) = x + R r\\) (in the rod's unknowns: \\(c(y) = (p(y) - G\hat q)/\rho\\),
 //! ρ the reach), so its linearised constraint is \\(G\Delta x - J\Delta y = c - Gx\\) with
 //!
-//! \\[ J = \tfrac{s}{\rho}\,P\,\big[\,I,\ -[\ell]_\times T(s w)\,\big], \\]
+//! \\[ J = \tfrac{s}{\rho}\,P\,\big\[\,I,\ -\[\ell\]_\times T(s w)\,\big\], \\]
 //!
 //! `ℓ = R r` the lever from the centre of mass (for an exact clamp's tangent pin, the
 //! body-fixed point on the held line nearest the control point, with the line's

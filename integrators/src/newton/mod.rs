@@ -148,7 +148,7 @@ pub trait NewtonProblem {
         false
     }
     /// Whether a step whose exact matrix factorised indefinite while a remainder needs
-    /// the correction carries the difference to the definite matrix with it ([`carried`]:
+    /// the correction carries the difference to the definite matrix with it (`carried.rs`:
     /// the exact step, quadratic convergence) instead of leaving the remainder out.
     /// Default false (time steps); static solves say true.
     fn carries_indefinite(&self) -> bool {

@@ -57,7 +57,7 @@
 //! **Bodies** (`/World/Bodies`, only for a scene with `[[bodies]]`): an `Xform` per
 //! body with its centre of mass (`double3 xformOp:translate`) and orientation (`quatd
 //! xformOp:orient`) time-sampled at every recorded code, its mass and inertia exactly,
-//! and a child `shape` showing it: the box of its principal moments (see [`bodies`]).
+//! and a child `shape` showing it: the box of its principal moments (see `bodies.rs`).
 //!
 //! `points` is `point3f[]` because the schema says so: a layer with `point3d[] points`
 //! opens, and `UsdGeom.BasisCurves(prim).GetPointsAttr().Get(t)` returns the doubles
