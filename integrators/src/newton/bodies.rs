@@ -281,11 +281,9 @@ impl Coupling {
     ) -> Result<(), IntegratorError> {
         let (s, ratio) = self.scales();
         let form = self.form.ok_or(IntegratorError::SolverState("no bodies"))?;
-        let potentials: Vec<_> = (0..self.bodies.len())
-            .map(|k| self.potential(system, k))
-            .collect();
-        for (k, b) in self.bodies.iter_mut().enumerate() {
-            let (_, pg, ph) = potentials[k];
+        for k in 0..self.bodies.len() {
+            let (_, pg, ph) = self.potential(system, k);
+            let b = &mut self.bodies[k];
             let mass = Matrix6::from_diagonal(&stack(Vector3::repeat(b.mass), Vector3::zeros()))
                 + embed(&b.inertia);
             let (residual, matrix) = match form {
@@ -405,8 +403,8 @@ impl Coupling {
     /// (zero after a static solve).
     pub fn write_back(&self, system: &mut dyn System) {
         let Some(form) = self.form else { return };
-        let poses: Vec<_> = (0..self.bodies.len()).map(|k| self.pose(k)).collect();
-        for ((body, b), (x, r)) in system.bodies_mut().iter_mut().zip(&self.bodies).zip(poses) {
+        for (k, (body, b)) in system.bodies_mut().iter_mut().zip(&self.bodies).enumerate() {
+            let (x, r) = self.pose(k);
             body.position = x;
             body.orientation = UnitQuaternion::new_normalize(r.into_inner());
             (body.velocity, body.angular_velocity) = match form {
