@@ -418,6 +418,30 @@ fn bodies_come_to_rest_on_the_floor_on_their_contact_shapes() {
     let y = result.bodies[0].position.last().unwrap()[1];
     println!("sphere, static: rests at {y:.12} m");
     assert!((y - 0.099).abs() < 1e-9, "{y}");
+    // On obstacles: a capsule across a horizontal capsule obstacle (axis along z, top at
+    // 0.6 m) rests on its middle, 0.6 + 0.05 − 0.0005 m; a ball on a sphere obstacle
+    // (top at 0.6 m) at 0.6 + 0.1 − 0.001 m.
+    for (shape, obstacle, rest) in [
+        (
+            "capsules = [[-0.2, 0.0, 0.0, 0.2, 0.0, 0.0, 0.05]]",
+            "kind = \"capsule\"\na = [3.0, 0.5, -1.0]\nb = [3.0, 0.5, 1.0]\nradius = 0.1",
+            0.6495,
+        ),
+        (
+            "spheres = [[0.0, 0.0, 0.0, 0.1]]",
+            "kind = \"sphere\"\ncentre = [3.0, 0.4, 0.0]\nradius = 0.2",
+            0.699,
+        ),
+    ] {
+        let text = format!(
+            "{}\n[[obstacles]]\n{obstacle}\n",
+            dropped_text(shape, 0.9, [0.0; 3])
+        );
+        let result = run(&Scene::from_toml(&text).expect("scene")).expect("run");
+        let y = result.bodies[0].position.last().unwrap()[1];
+        println!("{shape} on {obstacle:?}: rests at {y:.9} m");
+        assert!((y - rest).abs() < 1e-6, "{y} vs {rest}");
+    }
 }
 
 #[test]

@@ -38,9 +38,11 @@
 //! [`narrow`] for the maths.
 
 pub mod narrow;
+mod segment;
 mod sweep;
 
 pub use narrow::{closest_points, closest_points_between, Closest};
+pub use segment::closest_on_segments;
 pub use sweep::BoxSweep;
 
 use crate::basis::{spans, Span};

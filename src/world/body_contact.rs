@@ -4,8 +4,8 @@
 //!
 //! A shape is a body-fixed segment `a`–`b` (a sphere when `a = b`) of radius `r`. Against
 //! a surface (the floor or an `[[obstacles]]` entry, [`Obstacle::distance`]) its gap is
-//! \\(g = d(p) - r\\) at the point `p` of the segment nearest the surface (found by
-//! projections for a sphere or capsule; against a plane both ends count, so a capsule
+//! \\(g = d(p) - r\\) at the point `p` of the segment nearest the surface (the projection of a
+//! sphere's centre, the closest points of a capsule's axis and the segment; against a plane both ends count, so a capsule
 //! lying on it rests on both), and it adds
 //!
 //! \\[ E = \tfrac12 k\, \min(g, 0)^2, \qquad \nabla_x E = k g\, n, \qquad
@@ -18,6 +18,7 @@
 
 use crate::RodSystem;
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
+use splinerod_core::proximity::closest_on_segments;
 use splinerod_core::Real;
 use splinerod_energies::Obstacle;
 
@@ -87,26 +88,13 @@ fn points(
 
 /// The point of the segment `a`–`b` nearest a sphere's or capsule's core.
 fn nearest(a: Vector3<Real>, b: Vector3<Real>, surface: &Obstacle) -> Vector3<Real> {
-    let axis = b - a;
-    if axis.norm_squared() == 0.0 {
-        return a;
-    }
-    let project =
-        |c: Vector3<Real>| a + axis * ((c - a).dot(&axis) / axis.norm_squared()).clamp(0.0, 1.0);
-    match *surface {
-        Obstacle::Plane { .. } => a,
-        Obstacle::Sphere { centre, .. } => project(centre),
-        Obstacle::Capsule { a: ca, b: cb, .. } => {
-            // Alternating projections between the two segments (converge for
-            // non-parallel segments; a handful suffices at contact scale).
-            let (mut p, core) = (project(ca), cb - ca);
-            for _ in 0..8 {
-                let t = ((p - ca).dot(&core) / core.norm_squared()).clamp(0.0, 1.0);
-                p = project(ca + core * t);
-            }
-            p
-        }
-    }
+    let core = match *surface {
+        Obstacle::Plane { .. } => return a,
+        Obstacle::Sphere { centre, .. } => (centre, centre),
+        Obstacle::Capsule { a, b, .. } => (a, b),
+    };
+    let (s, _, _) = closest_on_segments((a, b), core);
+    a + (b - a) * s
 }
 
 impl RodSystem {

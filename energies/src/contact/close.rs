@@ -138,34 +138,7 @@ fn segment_distance(
     q0: Vector3<Real>,
     q1: Vector3<Real>,
 ) -> Real {
-    let (u, v, w) = (p1 - p0, q1 - q0, p0 - q0);
-    let (a, b, c, d, e) = (u.dot(&u), u.dot(&v), v.dot(&v), u.dot(&w), v.dot(&w));
-    let at = |s: Real, t: Real| (w + u * s - v * t).norm();
-    let clamp = |x: Real| {
-        if x.is_finite() {
-            x.clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
-    };
-    // The unconstrained minimiser, clamped, then each edge of the square.
-    let det = a * c - b * b;
-    let mut best = if det > 1e-14 * a * c {
-        let s = clamp((b * e - c * d) / det);
-        let t = clamp((a * e - b * d) / det);
-        at(s, t)
-    } else {
-        Real::INFINITY
-    };
-    for s in [0.0, 1.0] {
-        let t = clamp((b * s + e) / c);
-        best = best.min(at(s, t));
-    }
-    for t in [0.0, 1.0] {
-        let s = clamp((b * t - d) / a);
-        best = best.min(at(s, t));
-    }
-    best
+    splinerod_core::proximity::closest_on_segments((p0, p1), (q0, q1)).2
 }
 
 #[cfg(test)]
