@@ -65,10 +65,11 @@ pub struct StaticSensitivities {
     pub positions: Vec<Vec<[Real; 3]>>,
     /// The equilibrium positions of the samples, m.
     pub at: Vec<[Real; 3]>,
-    /// Per parameter, the derivative of each `[[pins]]` entry's force on the rod, N per
-    /// unit (as the run's `pin_forces`).
+    /// Per parameter, the derivative of the rod's force on each `[[pins]]` entry's
+    /// support, N per unit (as the run's `pin_forces`).
     pub pin_forces: Vec<Vec<[Real; 3]>>,
-    /// Each `[[pins]]` entry's force on the rod at equilibrium, N.
+    /// The rod's force on each `[[pins]]` entry's support at equilibrium, N (as the
+    /// run's `pin_forces`).
     pub forces: Vec<[Real; 3]>,
     /// Per parameter, the derivative of every control point.
     #[serde(skip)]

@@ -66,18 +66,19 @@ fn an_exact_clamp_holds_the_tangent_to_round_off() {
         assert!(deviation < 1e-12, "{method}: {deviation:e}");
         assert_eq!(forces.len(), 1);
         if method == "static" {
-            // The clamp carries the weight; the tip sags q L⁴/(8 EI) (Euler–Bernoulli).
-            assert!((forces[0][1] - 0.981).abs() < 1e-9, "{:?}", forces[0]);
+            // The rod's weight pulls the clamp down; the tip sags q L⁴/(8 EI)
+            // (Euler–Bernoulli).
+            assert!((forces[0][1] + 0.981).abs() < 1e-9, "{:?}", forces[0]);
             let exact = 0.981 / (8.0 * 10.0);
             assert!(
                 (tip[1] + exact).abs() < 1e-3 * exact,
                 "{} vs {exact}",
                 tip[1]
             );
-            // Its moment holds the weight's, W L / 2 about z.
+            // The rod's weight turns the clamp by its moment, −W L / 2 about z.
             let torque = result.pin_torques[0];
-            println!("clamp moment {torque:?} (W L / 2 = 0.4905)");
-            assert!((torque[2] - 0.4905).abs() < 1e-3 * 0.4905, "{torque:?}");
+            println!("clamp moment {torque:?} (−W L / 2 = −0.4905)");
+            assert!((torque[2] + 0.4905).abs() < 1e-3 * 0.4905, "{torque:?}");
             assert!(torque[0].abs() + torque[1].abs() < 1e-9, "{torque:?}");
         }
     }
@@ -140,7 +141,8 @@ fn a_sliding_pin_is_free_along_its_rail_and_holds_across_it() {
         (end[0] - 1.0).abs() < 1e-12 && end[1].abs() < 1e-12,
         "{end:?}"
     );
-    assert!((held[0] + 2.0).abs() < 1e-9, "{held:?}");
+    // The rod pulls its support with the 2 N the load pulls the rod.
+    assert!((held[0] - 2.0).abs() < 1e-9, "{held:?}");
 }
 
 #[test]

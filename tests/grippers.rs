@@ -10,8 +10,9 @@
 //!   2π: the twisting moment GJ·2π/L (1e-6 relative), as a `turn` of 2π does;
 //! * bad input is refused naming the field, through the library and the command line.
 //!
-//! Sign convention (as `pin_forces`): `pin_torques` is the torque the clamp exerts on
-//! the rod about the clamp point; the gripper feels its negative.
+//! Sign convention (as `pin_forces`): `pin_torques` is the torque the rod puts on the
+//! gripper about the clamp point (what a wrist's force–torque sensor reads); the clamp
+//! exerts its negative on the rod.
 
 use crate::common::cli::refused_scene;
 use crate::common::{assert_field, rejected};
@@ -151,11 +152,12 @@ fn a_static_cantilever_clamp_holds_the_weight_and_its_moment() {
         let result = run(&Scene::from_toml(&cantilever(extra)).expect("scene")).expect("run");
         let (force, torque) = (result.pin_forces[0], result.pin_torques[0]);
         println!("`{extra}`: clamp force {force:?} (weight {weight}), torque {torque:?} (exact {moment})");
-        assert!((force[1] - weight).abs() < 1e-9 * weight, "{force:?}");
+        // The rod's wrench on the gripper: its weight, down, and the weight's moment
+        // about the clamp, −μgL²/2 ẑ (the rod lies along +x).
+        assert!((force[1] + weight).abs() < 1e-9 * weight, "{force:?}");
         assert!(force[0].abs() + force[2].abs() < 1e-9 * weight, "{force:?}");
-        // The clamp holds the weight's moment about z (the weight's own is −μgL²/2 ẑ).
         assert!(
-            (torque[2] - moment).abs() < 1e-6 * moment,
+            (torque[2] + moment).abs() < 1e-6 * moment,
             "{torque:?} vs {moment}"
         );
         assert!(
@@ -177,9 +179,9 @@ fn a_static_cantilever_clamp_holds_the_weight_and_its_moment() {
     let (force, torque) = (result.pin_forces[0], result.pin_torques[0]);
     let exact = moment * alpha.cos();
     println!("turned by {alpha}: clamp force {force:?}, torque {torque:?} (exact {exact})");
-    assert!((force[1] - weight).abs() < 1e-6 * weight, "{force:?}");
+    assert!((force[1] + weight).abs() < 1e-6 * weight, "{force:?}");
     assert!(
-        (torque[2] - exact).abs() < 1e-4 * exact,
+        (torque[2] + exact).abs() < 1e-4 * exact,
         "{torque:?} vs {exact}"
     );
 }
@@ -248,8 +250,10 @@ fn a_gripper_rolled_a_full_turn_twists_the_rod_a_full_turn() {
             twist.moment
         );
         assert!((twist.twist - 2.0 * PI).abs() < 1e-6 * 2.0 * PI);
-        assert!((posed.pin_torques[1][0] - exact).abs() < 1e-6 * exact);
-        assert!((posed.pin_torques[0][0] + exact).abs() < 1e-6 * exact);
+        // The rod resists the roll: −GJ·2π/L about x on the rolled gripper, +GJ·2π/L
+        // on the fixed one.
+        assert!((posed.pin_torques[1][0] + exact).abs() < 1e-6 * exact);
+        assert!((posed.pin_torques[0][0] - exact).abs() < 1e-6 * exact);
         let gap = crate::common::sample_gap(&posed, &turned);
         assert!(gap < 1e-9, "{method}: pose and turn differ by {gap:e} m");
     }

@@ -30,8 +30,8 @@ method = "static"
 #[test]
 fn a_static_rod_carries_its_end_load_to_the_pin() {
     let result = run(&Scene::from_toml(HANGING).expect("scene")).expect("runs");
-    // Gravity on the rod (0.981 N down) plus the load.
-    let expected = -Vector3::new(0.3, -2.0 - 0.981, 0.1);
+    // The rod pulls its pin with its weight (0.981 N down) plus the load.
+    let expected = Vector3::new(0.3, -2.0 - 0.981, 0.1);
     let pin = Vector3::from(result.pin_forces[0]);
     assert!((pin - expected).norm() < 1e-9 * expected.norm(), "{pin:?}");
     assert!(result.energy.contains_key("load"));

@@ -230,12 +230,13 @@ fn uniform_torsion_gives_the_exact_torque_and_energy() {
                 torques[1][2]
             );
             assert!((twist.turn - turn).abs() < 1e-12);
+            // The rod resists the turn: −M on the turned clamp, +M on the other.
             assert!(
-                (torques[1][2] - moment).abs() <= 1e-9 * moment.abs(),
+                (torques[1][2] + moment).abs() <= 1e-9 * moment.abs(),
                 "{method}"
             );
             assert!(
-                (torques[0][2] + moment).abs() <= 1e-9 * moment.abs(),
+                (torques[0][2] - moment).abs() <= 1e-9 * moment.abs(),
                 "{method}"
             );
             assert!((e - energy).abs() <= 1e-9 * energy, "{method}");

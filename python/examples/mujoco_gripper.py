@@ -20,10 +20,10 @@ The coupling (`ClampCoupling`), once per MuJoCo step, explicit:
    about the clamp point). Then `sim.step()` advances the rod by the same dt, ending
    with the clamp at that pose.
 3. The rod's wrench goes back: splinerod's `pin_forces[i]` and `pin_torques[i]` are
-   what the clamp exerts ON THE ROD (torque about the clamp point p), so the body feels
-   F = -pin_forces[i] at p. MuJoCo's `xfrc_applied[body] = [force, torque]` (world
+   what the rod puts on the gripper (torque about the clamp point p), so the body feels
+   F = pin_forces[i] at p. MuJoCo's `xfrc_applied[body] = [force, torque]` (world
    frame) acts at the body's centre of mass (`data.xipos`), so the moment is shifted
-   there: T = -pin_torques[i] + (p - xipos) × F. `mj_step2` then integrates the body
+   there: T = pin_torques[i] + (p - xipos) × F. `mj_step2` then integrates the body
    with it (semi-implicit Euler: v_{n+1} = v_n + dt a(q_n), q_{n+1} from v_{n+1}).
 
 Both simulators use one world frame (z up, SI units, gravity [0, 0, -9.81]); the rod's
@@ -171,8 +171,8 @@ class ClampCoupling:
         rotation = data.site_xmat[site].reshape(3, 3) @ self.start.T
         self.sim.set_clamp_pose(self.pin, point, rotation)
         self.sim.step()
-        force = -self.sim.pin_forces[self.pin]
-        moment = -self.sim.pin_torques[self.pin]  # about the clamp point
+        force = self.sim.pin_forces[self.pin]
+        moment = self.sim.pin_torques[self.pin]  # about the clamp point
         self.force = force
         self.torque = moment + np.cross(point - data.xipos[self.body], force)
         data.xfrc_applied[self.body, :3] = self.force

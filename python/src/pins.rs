@@ -40,20 +40,26 @@ pub fn set_pin(
     Ok(())
 }
 
-/// The forces the pins exert on member 0's rod after the last step, N (a scene: one per
-/// `[[pins]]` entry).
+/// The forces member 0's rod puts on its pins' supports (grippers, bodies, fixed points)
+/// in the last step, N (a scene: one per `[[pins]]` entry): the opposite of the forces
+/// the pins exert on the rod.
 pub fn pin_forces(driver: &Driver) -> Vec<Vector3<Real>> {
     let forces = shield(|| {
         Ok(match driver {
             Driver::Scene(run) => run.pin_forces(0).unwrap_or_default(),
-            Driver::Code { sim, .. } => sim.integrator.pin_forces(),
+            Driver::Code { sim, .. } => on_supports(sim.integrator.pin_forces()),
         })
     });
     forces.unwrap_or_default()
 }
 
-/// The torques the `[[pins]]` entries exert on member 0's rod about their points after
-/// the last step, N·m; empty for a simulation built in code.
+/// The forces on the rod `forces` as the forces on the supports, zeros staying `+0`.
+fn on_supports(forces: Vec<Vector3<Real>>) -> Vec<Vector3<Real>> {
+    forces.into_iter().map(|f| Vector3::zeros() - f).collect()
+}
+
+/// The torques member 0's rod puts on the `[[pins]]` entries' supports about their
+/// points after the last step, N·m; empty for a simulation built in code.
 pub fn pin_torques(py: Python<'_>, driver: &Driver) -> PyResult<Vec<Vector3<Real>>> {
     let torques = match driver {
         Driver::Scene(run) => run.pin_torques(0).transpose().py_err(py)?,

@@ -301,17 +301,18 @@ impl Simulation {
         crate::pins::set_clamp_pose(&mut self.driver, index, position, rotation, members)
     }
 
-    /// Forces the pins exert on member 0's rod after the last step, `(k, 3)`, N (a
-    /// scene: one per `[[pins]]` entry, as the JSON's `pin_forces`).
+    /// Forces member 0's rod puts on its pins' supports (grippers, bodies, fixed points)
+    /// in the last step, `(k, 3)`, N (a scene: one per `[[pins]]` entry, as the JSON's
+    /// `pin_forces`; the pins' forces on the rod are the negative).
     #[getter]
     fn pin_forces<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<Real>> {
         points_array(py, &crate::pins::pin_forces(&self.driver))
     }
 
-    /// Torques the pins exert on member 0's rod about their points after the last step,
-    /// `(k, 3)`, N·m, one per `[[pins]]` entry (as the JSON's `pin_torques`: a clamp's
-    /// bending and twisting moment, zero for a plain pin; the gripper feels the
-    /// negative); empty for a simulation built in code.
+    /// Torques member 0's rod puts on its pins' supports about their points after the
+    /// last step, `(k, 3)`, N·m, one per `[[pins]]` entry (as the JSON's `pin_torques`:
+    /// a clamp's bending and twisting moment as the gripper feels it, zero for a plain
+    /// pin); empty for a simulation built in code.
     #[getter]
     fn pin_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Real>>> {
         Ok(points_array(

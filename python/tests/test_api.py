@@ -75,9 +75,9 @@ def test_state_arrays():
     assert sim.pins.shape == (2, 3)
     energies = sim.energies()
     assert set(energies) >= {"kinetic", "stretch", "gravity"}
-    # The pins hold the weight once the cable has settled.
+    # The cable's weight pulls its pins down once it has settled.
     sim.run()
-    assert sim.pin_forces[:, 1].sum() == pytest.approx(0.1 * 9.81, rel=1e-6)
+    assert sim.pin_forces[:, 1].sum() == pytest.approx(-0.1 * 9.81, rel=1e-6)
 
 
 def test_moving_a_pin_and_setting_velocities():

@@ -10,8 +10,8 @@
 //!   \\(-n \cdot \sum_i b_i(s^*)\, S_{q,i}(t)/\sigma\\) (no derivative of `s*`, as for
 //!   a static scene);
 //! - pin forces `t,pin,fx,fy,fz`: \\(r = (F_{obs} - F_j(t; p))/\sigma\\) with the force
-//!   `[[pins]]` entry `j` exerts on the rod during the step ending at `t` (the run's
-//!   `pin_forces`), derivative \\(-\mathrm{d}F_j/\mathrm{d}p/\sigma\\) from the step's
+//!   the rod puts on `[[pins]]` entry `j`'s support during the step ending at `t` (the
+//!   run's `pin_forces`), derivative \\(-\mathrm{d}F_j/\mathrm{d}p/\sigma\\) from the step's
 //!   tangent solve ([`crate::sensitivity::StepView`]).
 //!
 //! What the forward sensitivities refuse (adaptivity, cuts, sub-steps, other schemes)
@@ -35,7 +35,7 @@ const STEP_TIME_TOLERANCE: Real = 1e-6;
 pub enum Observed {
     /// A marker at a material coordinate, m.
     Marker(Real),
-    /// The force of a `[[pins]]` entry on the rod.
+    /// The force the rod puts on a `[[pins]]` entry's support.
     PinForce(usize),
     /// An unlabelled point: compared with the curve's nearest point.
     Point,

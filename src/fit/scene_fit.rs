@@ -6,8 +6,8 @@
 //! evaluation.
 //!
 //! Observed now, in a static scene: markers (`t,s,x,y,z`) and pin forces
-//! (`t,pin,fx,fy,fz`: the force `[[pins]]` entry `pin` exerts on the rod, as the run's
-//! `pin_forces`; residual \\((F_{obs} - F(p))/\sigma\\) with the multipliers'
+//! (`t,pin,fx,fy,fz`: the force the rod puts on `[[pins]]` entry `pin`'s support, as the
+//! run's `pin_forces`; residual \\((F_{obs} - F(p))/\sigma\\) with the multipliers'
 //! derivative), and unlabelled points (`t,x,y,z`: residual the distance to the curve's
 //! nearest point over σ, [`crate::fit::closest`]). A run observed along its trajectory
 //! is fitted by [`crate::fit::run_fit`].

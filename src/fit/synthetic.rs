@@ -151,9 +151,9 @@ pub fn noisy_run_points(
     Ok(ObservationFile { path, kind, rows })
 }
 
-/// The force of `[[pins]]` entry `pin` on the rod during the run of `truth`, after
-/// every `every`-th step, each component with Gaussian noise of standard deviation
-/// `sigma` (N, > 0), seeded with `seed`.
+/// The force the rod puts on `[[pins]]` entry `pin`'s support during the run of
+/// `truth`, after every `every`-th step, each component with Gaussian noise of standard
+/// deviation `sigma` (N, > 0), seeded with `seed`.
 pub fn noisy_run_pin_forces(
     truth: &Scene,
     pin: usize,

@@ -82,13 +82,14 @@ pub fn lift(scene: &Scene, run: &RunResult) -> Result<Real, Error> {
     let g = scene.world.gravity;
     let g_norm = g.iter().map(|x| x * x).sum::<Real>().sqrt();
     let weight = upper.linear_density * upper.rest_length * g_norm;
-    // The pins' forces along "up" (against gravity).
+    // What the upper rod hangs on its pins, along gravity (`pin_forces`: the rod's
+    // forces on them).
     let held: Real = scene
         .pins
         .iter()
         .zip(&run.pin_forces)
         .filter(|(p, _)| p.rod.as_deref() == Some("upper"))
-        .map(|(_, f)| -(0..3).map(|k| f[k] * g[k]).sum::<Real>() / g_norm)
+        .map(|(_, f)| (0..3).map(|k| f[k] * g[k]).sum::<Real>() / g_norm)
         .sum();
     Ok((weight - held) / weight)
 }

@@ -55,11 +55,13 @@ pub struct RunResult {
     pub knots: Vec<Real>,
     /// Solver counters.
     pub solver: SolverTotals,
-    /// Forces the pins exert on the rod at the end, N (static solves only).
+    /// Forces the rod puts on its pins' supports (grippers, bodies, fixed points) at the
+    /// end, N, one per `[[pins]]` entry: the negative of the pins' forces on the rod.
     pub pin_forces: Vec<[Real; 3]>,
-    /// Torques the pins exert on the rod at the end, N·m, one per pin, about the pinned
-    /// point: an exact clamp's bending moment plus, with `rod.twist_stiffness`, the
-    /// twisting moment about the end clamps' axes (absent when no pin carries a torque).
+    /// Torques the rod puts on its pins' supports at the end, N·m, one per pin, about
+    /// the pinned point: an exact clamp's bending moment plus, with
+    /// `rod.twist_stiffness`, the twisting moment about the end clamps' axes, as the
+    /// gripper feels them (absent when no pin carries a torque).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pin_torques: Vec<[Real; 3]>,
     /// The twist between the end clamps at the end (with `rod.twist_stiffness` only).

@@ -33,7 +33,8 @@ pub struct RodOutput {
     pub samples: Samples,
     /// Its energies, J, by name (`kinetic` included).
     pub energy: BTreeMap<String, Real>,
-    /// The forces of the `[[pins]]` entries naming it, in file order, N.
+    /// The forces it puts on the supports of the `[[pins]]` entries naming it, in file
+    /// order, N (as the run's `pin_forces`).
     pub pin_forces: Vec<[Real; 3]>,
     /// The stretching form it used (see [`crate::run::result::RodModel`]).
     pub stretch_formulation_used: String,

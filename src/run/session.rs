@@ -127,17 +127,17 @@ impl SceneRun {
         self.run.ensemble.members.get_mut(index)
     }
 
-    /// The force each `[[pins]]` entry exerts on member `index`'s rod after the last
-    /// stage, N (as the JSON's `pin_forces`); `None` past the last member.
+    /// The force member `index`'s rod puts on each `[[pins]]` entry's support after the
+    /// last stage, N (as the JSON's `pin_forces`); `None` past the last member.
     pub fn pin_forces(&self, index: usize) -> Option<Vec<Vector3<Real>>> {
         let sim = self.members().get(index)?;
         let forces = crate::run::pins::scene_pin_forces(&self.scene, sim);
         Some(forces.into_iter().map(Vector3::from).collect())
     }
 
-    /// The torque each `[[pins]]` entry exerts on member `index`'s rod about its point
-    /// after the last stage, N·m (as the JSON's `pin_torques`, but one per entry even
-    /// when all are zero); `None` past the last member.
+    /// The torque member `index`'s rod puts on each `[[pins]]` entry's support about its
+    /// point after the last stage, N·m (as the JSON's `pin_torques`, but one per entry
+    /// even when all are zero); `None` past the last member.
     pub fn pin_torques(&self, index: usize) -> Option<Result<Vec<Vector3<Real>>, Error>> {
         let sim = self.members().get(index)?;
         let torques = crate::run::pins::pin_torques(&self.scene, sim).map(|mut t| {

@@ -90,10 +90,10 @@ pub struct DynamicSensitivities {
     pub positions: Vec<Vec<[Real; 3]>>,
     /// The final positions of the samples, m.
     pub at: Vec<[Real; 3]>,
-    /// Per parameter, the derivative of each `[[pins]]` entry's force in the last step,
-    /// N per unit.
+    /// Per parameter, the derivative of the rod's force on each `[[pins]]` entry's
+    /// support in the last step, N per unit (as the run's `pin_forces`).
     pub pin_forces: Vec<Vec<[Real; 3]>>,
-    /// Each `[[pins]]` entry's force in the last step, N.
+    /// The rod's force on each `[[pins]]` entry's support in the last step, N.
     pub forces: Vec<[Real; 3]>,
     /// Per recorded time (every step), the samples' derivatives.
     pub times: Vec<TimeSensitivities>,

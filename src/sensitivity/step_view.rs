@@ -35,8 +35,8 @@ impl<'a> StepView<'a> {
         }
     }
 
-    /// The force `[[pins]]` entry `pin` exerted on the rod during the step, N; an error
-    /// naming `pin` beyond the scene's pins.
+    /// The force the rod put on `[[pins]]` entry `pin`'s support during the step, N (as
+    /// the run's `pin_forces`); an error naming `pin` beyond the scene's pins.
     pub fn pin_force(&self, pin: usize) -> Result<Vector3<Real>, Error> {
         self.check(pin)?;
         let forces = self.sim.integrator.pin_forces();
