@@ -19,6 +19,7 @@ mod batched;
 mod bench;
 mod bending;
 mod bodies;
+mod body_friction;
 mod bundled;
 mod capstan_turn;
 mod catenary;

@@ -208,17 +208,18 @@ impl Scene {
         if contact.shapes.is_empty() {
             return Ok(());
         }
-        let floor = self
-            .contact
-            .as_ref()
-            .filter(|c| c.enabled)
-            .and_then(|c| c.floor);
-        if let Some(h) = floor {
+        let spec = self.contact.as_ref().filter(|c| c.enabled);
+        let friction = spec.map_or(0.0, |c| c.friction);
+        if let Some(slip) = spec.and_then(|c| c.slip_speed) {
+            contact.slip_speed = slip;
+        }
+        if let Some(h) = spec.and_then(|c| c.floor) {
             let plane = Obstacle::Plane {
                 point: Vector3::new(0.0, h, 0.0),
                 normal: Vector3::y(),
             };
             contact.surfaces.push(plane);
+            contact.friction.push(friction);
         }
         for (i, spec) in self.obstacles.iter().enumerate() {
             if spec.motion().0.is_some() {
@@ -230,6 +231,7 @@ impl Scene {
                 ));
             }
             contact.surfaces.push(spec.obstacle());
+            contact.friction.push(spec.friction().unwrap_or(friction));
         }
         let masses: Vec<f64> = system.bodies.bodies.iter().map(|b| b.mass).collect();
         let g = system.bodies.gravity.norm();

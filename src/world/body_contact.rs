@@ -1,5 +1,5 @@
 //! Bodies resting on the floor and on obstacles: contact spheres and capsules declared
-//! on a body ([`BodyShape`]), frictionless, by a penalty in the body's own potential
+//! on a body ([`BodyShape`]), by a penalty in the body's own potential
 //! ([`System::add_body_potential`](splinerod_integrators::System::add_body_potential), solved in the same Newton system).
 //!
 //! A shape is a body-fixed segment `a`–`b` (a sphere when `a = b`) of radius `r`. Against
@@ -14,7 +14,8 @@
 //! with the Hessian \\(k\, J^T J\\), \\(J = \[\,n^T,\ ((p - x)\times n)^T\,\]\\) (the
 //! surface's and the segment's curvature left out: definite). The stiffness of a body is
 //! chosen, not asked: its weight (at least under 9.81 m/s²) on one shape sinks it by 1 %
-//! of its smallest radius, \\(k = M \max(|g|, 9.81) / (0.01\, r_{min})\\).
+//! of its smallest radius, \\(k = M \max(|g|, 9.81) / (0.01\, r_{min})\\). Friction:
+//! [`crate::world::body_friction`].
 
 use crate::RodSystem;
 use nalgebra::{Matrix6, UnitQuaternion, Vector3, Vector6};
@@ -40,8 +41,13 @@ pub struct BodyShape {
     pub radius: Real,
 }
 
-/// The bodies' shapes, the surfaces they meet and each body's penalty stiffness.
-#[derive(Debug, Clone, Default, PartialEq)]
+/// Default sliding speed below which a body's friction sticks (smoothed), m/s (as the
+/// rods' `[contact] slip_speed`).
+pub const DEFAULT_SLIP_SPEED: Real = 1e-3;
+
+/// The bodies' shapes, the surfaces they meet, each body's penalty stiffness and the
+/// friction ([`crate::world::body_friction`]).
+#[derive(Debug, Clone, PartialEq)]
 pub struct BodyContact {
     /// The shapes.
     pub shapes: Vec<BodyShape>,
@@ -49,6 +55,28 @@ pub struct BodyContact {
     pub surfaces: Vec<Obstacle>,
     /// Penalty stiffness per body, N/m.
     pub stiffness: Vec<Real>,
+    /// Coulomb coefficient per surface (≥ 0; missing entries: none).
+    pub friction: Vec<Real>,
+    /// Sliding speed below which friction sticks (smoothed), m/s (> 0).
+    pub slip_speed: Real,
+    /// The slip `ε` of the current step, m (`slip_speed · dt`).
+    pub slip: Real,
+    /// The contacts frozen at the current step's start.
+    pub lags: Vec<crate::world::body_friction::BodyLag>,
+}
+
+impl Default for BodyContact {
+    fn default() -> Self {
+        Self {
+            shapes: Vec::new(),
+            surfaces: Vec::new(),
+            stiffness: Vec::new(),
+            friction: Vec::new(),
+            slip_speed: DEFAULT_SLIP_SPEED,
+            slip: 0.0,
+            lags: Vec::new(),
+        }
+    }
 }
 
 impl BodyContact {
@@ -69,6 +97,20 @@ impl BodyContact {
             })
             .collect();
     }
+}
+
+/// The contacts of `shape` on the body at the pose `(x, r)` with `surface`: each point
+/// of its axis that touches (module docs), its gap (< 0, m) and the surface's normal.
+pub(crate) fn touching<'a>(
+    shape: &BodyShape,
+    (x, r): (&Vector3<Real>, &UnitQuaternion<Real>),
+    surface: &'a Obstacle,
+) -> impl Iterator<Item = (Vector3<Real>, Real, Vector3<Real>)> + 'a {
+    let (a, b, radius) = (x + r * shape.a, x + r * shape.b, shape.radius);
+    points(a, b, surface).filter_map(move |(surface, p)| {
+        let (d, n) = surface.distance(&p);
+        (d < radius).then_some((p, d - radius, n))
+    })
 }
 
 /// The points of the segment `a`–`b` that touch `surface`: both ends against a plane (a
@@ -111,13 +153,11 @@ impl RodSystem {
         let k = contact.stiffness.get(body).copied().unwrap_or(0.0);
         let mut energy = 0.0;
         for shape in contact.shapes.iter().filter(|s| s.body == body) {
-            let (a, b) = (x + r * shape.a, x + r * shape.b);
-            for (surface, p) in contact.surfaces.iter().flat_map(|s| points(a, b, s)) {
-                let (d, n) = surface.distance(&p);
-                let gap = d - shape.radius;
-                if gap >= 0.0 {
-                    continue;
-                }
+            let touches = contact
+                .surfaces
+                .iter()
+                .flat_map(|s| touching(shape, (x, r), s));
+            for (p, gap, n) in touches {
                 energy += 0.5 * k * gap * gap;
                 let moment = (p - x).cross(&n);
                 let jac = Vector6::new(n.x, n.y, n.z, moment.x, moment.y, moment.z);

@@ -9,6 +9,7 @@
 
 pub mod bodies;
 pub mod body_contact;
+pub mod body_friction;
 pub(crate) mod ensemble;
 pub mod estimate;
 pub(crate) mod grab;

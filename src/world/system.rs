@@ -291,8 +291,12 @@ impl RodSystem {
     }
 
     /// Starts an integrator step of `dt` seconds: every energy's
-    /// [`Lifecycle::begin_step`].
+    /// [`Lifecycle::begin_step`], and the bodies' friction
+    /// ([`crate::world::body_friction`]).
     pub fn begin_step(&mut self, dt: Real) -> Result<(), CoreError> {
+        if !self.bodies.contact.shapes.is_empty() {
+            self.bodies.contact.begin_step(&self.bodies.bodies, dt);
+        }
         let rod = &self.rod;
         self.energies
             .iter_mut()
@@ -419,7 +423,7 @@ impl System for RodSystem {
         grad: &mut nalgebra::Vector6<Real>,
         hess: &mut nalgebra::Matrix6<Real>,
     ) -> Real {
-        self.body_contact(body, pose, grad, hess)
+        self.body_contact(body, pose, grad, hess) + self.body_friction(body, pose, grad, hess)
     }
     fn potential_energy(&self) -> Real {
         let total: Real = self.acting().map(|e| e.energy(&self.rod)).sum();

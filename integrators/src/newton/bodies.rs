@@ -261,7 +261,7 @@ impl Coupling {
         let (x, r) = self.pose(k);
         let (mut g, mut h) = (Vector6::zeros(), Matrix6::zeros());
         let e = system.add_body_potential(k, (&x, &r), &mut g, &mut h);
-        if e == 0.0 && g == Vector6::zeros() {
+        if e == 0.0 && g == Vector6::zeros() && h == Matrix6::zeros() {
             return (e, g, h);
         }
         let w = self.bodies[k].y.fixed_rows::<3>(3).into_owned();
