@@ -12,6 +12,7 @@ pub const SCENES: &[(&str, &str)] = &[
         "body_pendulum",
         include_str!("../scenes/body_pendulum.toml"),
     ),
+    ("body_tow", include_str!("../scenes/body_tow.toml")),
     ("cantilever", include_str!("../scenes/cantilever.toml")),
     (
         "catenary_static",

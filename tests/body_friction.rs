@@ -207,3 +207,33 @@ fn a_ball_rolls_down_an_incline_at_five_sevenths_of_g_sin_alpha() {
         );
     }
 }
+
+#[test]
+fn the_towed_block_slides_with_coulomb_friction_step_by_step() {
+    // scenes/body_tow.toml: M = 2 kg, μ = 0.4, h = 5 ms. While the block slides its
+    // equation of motion along x is M (v₊ − v)/h = F_x + μ (M g − F_y)·sign, with F the
+    // cable's pull at the step's end and the normal force lagged by a step.
+    let text = std::fs::read_to_string("scenes/body_tow.toml").expect("scene");
+    let result = run_text(&text);
+    let track = &result.bodies[0];
+    let (mass, mu, h) = (2.0, 0.4, 0.005);
+    let mut worst: f64 = 0.0;
+    let mut checked = 0;
+    for k in 2..track.t.len() - 1 {
+        let (v, next) = (track.velocity[k][0], track.velocity[k + 1][0]);
+        if v.abs() < 0.05 || next.abs() < 0.05 {
+            continue; // starting or stopping: the feet may stick
+        }
+        let normal = mass * G - track.force[k][1];
+        let friction = mu * normal * -v.signum();
+        let inertia = mass * (next - v) / h;
+        let off = (inertia - track.force[k + 1][0] - friction).abs() / (mu * mass * G);
+        worst = worst.max(off);
+        checked += 1;
+    }
+    let end = last(&track.position)[0];
+    println!("{checked} sliding steps: Coulomb balance within {worst:.2e} of μMg; the block ends at x = {end:.5} m");
+    assert!(checked > 300, "{checked}");
+    assert!(worst < 1e-4, "{worst}");
+    assert!((end + 0.6).abs() < 0.01, "{end}");
+}
