@@ -138,6 +138,18 @@ fn midpoint_and_bdf2_resume_exactly() {
 #[test]
 fn a_scene_with_a_rigid_body_resumes_exactly() {
     resumes_exactly("bodies", Path::new("scenes/body_pendulum.toml"), &[300]);
+    // BDF2 keeps the bodies' motion a step back in its history: stopped after its
+    // Euler start step and in mid-run.
+    let d = dir("bodies-bdf2");
+    let bdf2 = variant(
+        &d,
+        "body_pendulum.toml",
+        &[
+            ("\"implicit-euler\"", "\"bdf2\""),
+            ("duration = 4.3", "duration = 1.5"),
+        ],
+    );
+    resumes_exactly("bodies-bdf2", &bdf2, &[1, 170]);
 }
 
 #[test]

@@ -22,9 +22,13 @@
 //! implicit Euler's problem with shifted base and step ([`crate::incremental`]). Pins hold
 //! at the end of the step: \\(G x = (p - G\hat q)/\beta\\).
 //!
+//! **Rigid bodies** ([`System::bodies`]) take the same formula in the rods' Newton
+//! solve, from a base blended on the rotation group ([`crate::bdf2_bodies`]).
+//!
 //! **Start.** BDF2 needs the previous state. The first step, and any step after the
 //! history became invalid, is an implicit midpoint step ([`crate::ImplicitMidpoint`]):
-//! second order and exact for constant accelerations, so free flight stays exact. The
+//! second order and exact for constant accelerations, so free flight stays exact; with
+//! rigid bodies (which the midpoint rule does not carry) an implicit Euler step. The
 //! history is invalid when the step ratio leaves `[1/MAX_STEP_RATIO, MAX_STEP_RATIO]`
 //! (variable-step BDF2 is zero-stable for ω < 1 + √2), the basis changed (knot
 //! insertion or removal: the old state is in another basis) or the rod's state is not
@@ -34,6 +38,7 @@
 //! Its [`Forward`] form carries forward sensitivities through each step, the midpoint
 //! start included, with the two-step base's derivative ([`crate::forward`]).
 
+use crate::bdf2_bodies::BodyHistory;
 use crate::forward::{Forward, ForwardState, ForwardWork, ParameterRates, StepKind};
 use crate::incremental::{Increment, Stepper};
 use crate::midpoint::midpoint_step;
@@ -66,21 +71,26 @@ struct History {
     previous_v: Vec<Vector3<Real>>,
     left_q: Vec<Vector3<Real>>,
     left_v: Vec<Vector3<Real>>,
+    bodies: BodyHistory,
 }
 
 impl History {
     /// Whether a BDF2 step may use the stored previous state.
-    fn usable(&self, rod: &Rod, dt: Real) -> bool {
+    fn usable(&self, system: &dyn System, dt: Real) -> bool {
         let ratio = dt / self.dt;
+        let rod = system.rod();
         self.valid
             && (1.0 / MAX_STEP_RATIO..=MAX_STEP_RATIO).contains(&ratio)
             && self.epoch == rod.topology_epoch()
             && self.left_q == rod.positions
             && self.left_v == rod.velocities
+            && self.bodies.matches(system.bodies())
     }
 
-    /// Records a successful step from `(q0, v0)` to the rod's state.
-    fn record(&mut self, stepper: &Stepper, rod: &Rod, dt: Real) {
+    /// Records a successful step from `(q0, v0)` to the system's state.
+    fn record(&mut self, stepper: &Stepper, system: &dyn System, dt: Real) {
+        let rod = system.rod();
+        self.bodies.record(stepper.start_bodies(), system.bodies());
         self.previous_q.clone_from(&stepper.q0);
         self.previous_v.clone_from(&stepper.v0);
         self.left_q.clone_from(&rod.positions);
@@ -122,6 +132,11 @@ impl Bdf2 {
         for (base, (v, p)) in s.base_v.iter_mut().zip(s.v0.iter().zip(&h.previous_v)) {
             *base = (v * a - p * b) * scale;
         }
+        if !system.bodies().is_empty() {
+            h.bodies
+                .blend(system.bodies(), (a * scale, b * scale), &mut s.body_base);
+            s.blend_bodies = true;
+        }
         let beta = (1.0 + w) * scale * dt;
         let step = Increment { beta, reach: beta };
         self.forward.kind = Some(StepKind::Bdf2 {
@@ -144,6 +159,7 @@ impl Integrator for Bdf2 {
         for field in [&h.previous_q, &h.previous_v, &h.left_q, &h.left_v] {
             out.vectors(field);
         }
+        h.bodies.save(out);
     }
 
     fn load_state(
@@ -162,22 +178,31 @@ impl Integrator for Bdf2 {
         ] {
             input.vectors_into(field)?;
         }
+        h.bodies.load(input)?;
         h.epoch = rod.topology_epoch();
         Ok(())
     }
 
     fn step(&mut self, system: &mut dyn System, dt: Real) -> Result<StepStats, IntegratorError> {
         self.forward.kind = None;
+        self.stepper.bodies = true;
         self.stepper.begin(system, dt)?;
-        let result = if self.history.usable(system.rod(), dt) {
+        let result = if self.history.usable(system, dt) {
             self.bdf2_step(system, dt)
+        } else if !system.bodies().is_empty() {
+            self.forward.kind = Some(StepKind::Euler);
+            let step = Increment {
+                beta: dt,
+                reach: dt,
+            };
+            self.stepper.solve(system, &self.params, step)
         } else {
             self.forward.kind = Some(StepKind::Midpoint);
             midpoint_step(&mut self.stepper, system, &self.params, dt)
         };
         let result = self.stepper.finish(system, result);
         if result.is_ok() {
-            self.history.record(&self.stepper, system.rod(), dt);
+            self.history.record(&self.stepper, system, dt);
         } else {
             self.forward.kind = None;
         }

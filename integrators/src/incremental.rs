@@ -91,6 +91,8 @@ struct IncrementalProblem<'a> {
     definite_only: bool,
     /// Whether rigid bodies move with the step (the scheme's base is its start state).
     bodies: bool,
+    /// The bodies' base when it is not their start state ([`Stepper::body_base`]).
+    body_base: Option<&'a [RigidBody]>,
 }
 
 impl IncrementalProblem<'_> {
@@ -220,6 +222,10 @@ impl NewtonProblem for IncrementalProblem<'_> {
         })
     }
 
+    fn body_base(&self) -> Option<&[RigidBody]> {
+        self.body_base
+    }
+
     /// Every iteration starts from the exact Hessian again: the definite one converges
     /// only linearly, and is needed only while the exact step climbs the merit.
     fn on_step(&mut self, _step_length: Real) {
@@ -256,11 +262,16 @@ pub(crate) struct Stepper {
     /// merit, never to a saddle (the static solver's continuation path needs this).
     pub definite_only: bool,
     /// Whether the scheme moves rigid bodies ([`System::bodies`]): its base is the start
-    /// state (implicit Euler, the static solver's pseudo-time steps). Default false: a
-    /// system with bodies is refused.
+    /// state (implicit Euler, the static solver's pseudo-time steps) or `body_base`
+    /// (BDF2). Default false: a system with bodies is refused.
     pub bodies: bool,
     /// The bodies at the start of the step (for rollback).
     bodies0: Vec<RigidBody>,
+    /// The bodies' base of the step when it is not their start state (BDF2's blend of
+    /// the last two states), used while `blend_bodies`.
+    pub body_base: Vec<RigidBody>,
+    /// Whether the step starts the bodies from `body_base`; cleared by [`Self::begin`].
+    pub blend_bodies: bool,
 }
 
 impl Stepper {
@@ -289,7 +300,13 @@ impl Stepper {
         self.x.copy_from_slice(&rod.velocities);
         self.bodies0.clear();
         self.bodies0.extend_from_slice(system.bodies());
+        self.blend_bodies = false;
         Ok(())
+    }
+
+    /// The bodies at the start of the step.
+    pub fn start_bodies(&self) -> &[RigidBody] {
+        &self.bodies0
     }
 
     /// Runs Newton on the incremental problem; the solution is left applied to the rod.
@@ -319,6 +336,7 @@ impl Stepper {
             hessian: HessianKind::Exact,
             definite_only: self.definite_only,
             bodies: self.bodies,
+            body_base: self.blend_bodies.then_some(&self.body_base[..]),
         };
         let stats = newton::solve(
             &mut problem,
@@ -393,6 +411,7 @@ impl Stepper {
             hessian: HessianKind::Exact,
             definite_only: false,
             bodies: false,
+            body_base: None,
         };
         self.saved_mu.clear();
         self.saved_mu

@@ -29,6 +29,7 @@ mod banded_cholesky;
 pub mod banded_ldlt;
 pub mod batched;
 mod bdf2;
+mod bdf2_bodies;
 mod block_pattern;
 pub mod block_sparse;
 #[cfg(test)]

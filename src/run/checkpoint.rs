@@ -42,8 +42,9 @@ use std::path::{Path, PathBuf};
 /// final error estimate; 4: the checksum over the file and the scene text's hash, the
 /// kernel set, and the solver totals' steps solved alone per reason; 5: the count of
 /// steps with a hinge and the estimate's spread; 6: each probe's rod; 7: the grippers'
-/// poses; 8: the rigid bodies' states and tracks).
-pub const VERSION: u32 = 8;
+/// poses; 8: the rigid bodies' states and tracks; 9: BDF2's history of the rigid
+/// bodies' motion).
+pub const VERSION: u32 = 9;
 /// The first format version with a checksum; older files are refused as such.
 const FIRST_CHECKSUMMED: u32 = 4;
 /// Bytes of the checksum at the end of the file.

@@ -162,8 +162,9 @@ impl Scene {
             return Ok(());
         }
         let method = self.solver.method.name();
-        if !matches!(method, "implicit-euler" | "static") {
-            let reason = "scenes with [[bodies]] are solved by \"implicit-euler\" or \"static\"";
+        if !matches!(method, "implicit-euler" | "bdf2" | "static") {
+            let reason =
+                "scenes with [[bodies]] are solved by \"implicit-euler\", \"bdf2\" or \"static\"";
             return Err(Error::field("solver.method", format!("{method:?}"), reason));
         }
         let unsupported = [

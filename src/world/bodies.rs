@@ -2,7 +2,7 @@
 //!
 //! A body is integrated with the rods in one Newton system (the integrators' body
 //! coupling: the pins it holds follow its body-fixed points, and their multipliers act
-//! back on it); implicit Euler and the static solver support it. Between steps the held
+//! back on it); implicit Euler, BDF2 and the static solver support it. Between steps the held
 //! pins are moved to where the bodies put them ([`RodSystem::follow_bodies`]), so that
 //! every reader of the pins (outputs, pin torques) sees the solved state.
 //!

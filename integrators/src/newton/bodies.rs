@@ -35,7 +35,7 @@ use crate::kkt::Constraints;
 use crate::{IntegratorError, System};
 use nalgebra::{Matrix3, Matrix3x6, Matrix6, UnitQuaternion, Vector3, Vector6};
 use splinerod_core::body::{left_jacobian, skew};
-use splinerod_core::{Pin, Real, Rod};
+use splinerod_core::{Pin, Real, RigidBody, Rod};
 
 /// How a Newton problem moves bodies ([`crate::newton::NewtonProblem::body_form`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,24 +108,35 @@ impl Coupling {
         self.form = None;
     }
 
-    /// Starts a solve: reads the system's bodies and attachments (none: inactive).
+    /// Starts a solve: reads the system's bodies and attachments (none: inactive); the
+    /// step starts from `base` when given (one per body of the system), else from the
+    /// system's bodies.
     pub fn begin(
         &mut self,
         system: &dyn System,
         form: Option<BodyForm>,
+        base: Option<&[RigidBody]>,
     ) -> Result<bool, IntegratorError> {
         self.form = None;
-        let bodies = system.bodies();
-        if bodies.is_empty() {
+        if system.bodies().is_empty() {
             return Ok(false);
         }
+        let bodies = match base {
+            Some(base) if base.len() == system.bodies().len() => base,
+            Some(_) => {
+                return Err(IntegratorError::SolverState(
+                    "a step's base has another number of bodies than the system",
+                ))
+            }
+            None => system.bodies(),
+        };
         let form = form.ok_or(IntegratorError::SolverState(
-            "rigid bodies are integrated by implicit Euler and the static solver only",
+            "rigid bodies are integrated by implicit Euler, BDF2 and the static solver only",
         ))?;
         let s = match form {
             BodyForm::Dynamic { beta, reach } if beta != reach => {
                 return Err(IntegratorError::SolverState(
-                    "rigid bodies need a scheme whose reach is its step (implicit Euler)",
+                    "rigid bodies need a scheme whose reach is its step (implicit Euler, BDF2)",
                 ))
             }
             BodyForm::Dynamic { beta, .. } => beta,

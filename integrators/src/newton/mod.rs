@@ -37,7 +37,7 @@ pub(crate) use curvature::negative_curvature;
 use fallback::{indefinite_fallback, Fallback};
 use line_search::{line_search, Trial};
 use nalgebra::Vector3;
-use splinerod_core::{BasisValues, BlockBanded, Pin, Real, Rod};
+use splinerod_core::{BasisValues, BlockBanded, Pin, Real, RigidBody, Rod};
 pub use tangent::{tangents, Tangent};
 
 /// Settings of Newton's method.
@@ -173,6 +173,13 @@ pub trait NewtonProblem {
         None
     }
 
+    /// The bodies a time step starts from when that is not the system's state (a
+    /// two-step scheme's blend of its last two states: poses and velocities, the
+    /// system's loads and mass properties); `None` (the default): the system's bodies.
+    fn body_base(&self) -> Option<&[RigidBody]> {
+        None
+    }
+
     /// Called after each step with the accepted step length `t ∈ (0, 1]`.
     fn on_step(&mut self, step_length: Real) {
         let _ = step_length;
@@ -261,7 +268,9 @@ pub fn solve(
     let n = x.len();
     ws.solver_kind(params.linear_solver, system);
     ws.resize(n, system.pins().len());
-    let coupled = ws.coupling.begin(system, problem.body_form())?;
+    let coupled = ws
+        .coupling
+        .begin(system, problem.body_form(), problem.body_base())?;
     ws.constraints.set_held(ws.coupling.held_pins());
     if coupled {
         ws.multipliers
