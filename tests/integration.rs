@@ -19,7 +19,7 @@ mod batched;
 mod bench;
 mod bending;
 mod bodies;
-mod body_friction;
+mod body_contact;
 mod bundled;
 mod capstan_turn;
 mod catenary;

@@ -1,5 +1,7 @@
-//! Coulomb friction on rigid bodies' contact shapes (`[contact] friction`,
-//! `[[obstacles]] friction`), against exact answers of rigid-body mechanics:
+//! Rigid bodies' contact shapes (spheres and capsules) on the floor and obstacles,
+//! against exact answers: at rest a shape sinks by the penalty's 1 % of its radius
+//! under the weight it carries; with Coulomb friction (`[contact] friction`,
+//! `[[obstacles]] friction`):
 //!
 //! * a block sliding on the floor stops after v₀²/(2μg) (implicit Euler: less v₀h/2);
 //! * a ball thrown without spin rolls off at 5/7 of its speed (angular momentum about
@@ -236,4 +238,82 @@ fn the_towed_block_slides_with_coulomb_friction_step_by_step() {
     assert!(checked > 300, "{checked}");
     assert!(worst < 1e-4, "{worst}");
     assert!((end + 0.6).abs() < 0.01, "{end}");
+}
+
+/// A body with `shapes` (TOML lines) dropped from `height` onto the floor at y = 0 beside
+/// a cable pinned at both ends (which it does not touch); implicit Euler for 3 s.
+fn dropped(shapes: &str, height: f64, orientation: [f64; 3]) -> RunResult {
+    run_text(&dropped_text(shapes, height, orientation))
+}
+
+/// The scene of [`dropped`].
+fn dropped_text(shapes: &str, height: f64, orientation: [f64; 3]) -> String {
+    let start = ([3.0, height, 0.0], orientation, [0.0; 3]);
+    body_scene(shapes, start, "[contact]\nfloor = 0.0", (0.002, 3.0))
+}
+
+#[test]
+fn bodies_come_to_rest_on_the_floor_on_their_contact_shapes() {
+    // A sphere of radius 0.1 at the centre of mass: at rest its weight sinks it by 1 %
+    // of its radius (the penalty's stiffness), so the centre rests at 0.099 m.
+    let ball = dropped("spheres = [[0.0, 0.0, 0.0, 0.1]]", 0.3, [0.0; 3]);
+    let track = &ball.bodies[0];
+    let (y, v) = (
+        track.position.last().unwrap()[1],
+        track.velocity.last().unwrap(),
+    );
+    println!("sphere: rests at {y:.9} m, velocity {v:?}");
+    assert!(
+        (y - 0.099).abs() < 1e-6 && v.iter().all(|c| c.abs() < 1e-5),
+        "{y} {v:?}"
+    );
+    // A capsule dropped tilted lands on one end and settles flat on both: each end
+    // carries half the weight, sinking by 0.5 % of the radius.
+    let capsule = dropped(
+        "capsules = [[-0.2, 0.0, 0.0, 0.2, 0.0, 0.0, 0.05]]",
+        0.3,
+        [0.0, 0.0, 0.2],
+    );
+    let track = &capsule.bodies[0];
+    let (y, turn) = (
+        track.position.last().unwrap()[1],
+        track.orientation.last().unwrap(),
+    );
+    let v = track.velocity.last().unwrap();
+    println!("capsule: rests at {y:.9} m, orientation {turn:?}, velocity {v:?}");
+    assert!((y - 0.04975).abs() < 1e-6, "{y}");
+    assert!(turn.iter().all(|c| c.abs() < 1e-6), "{turn:?}");
+    // It fell straight down: no sideways force from a frictionless floor.
+    assert!((track.position.last().unwrap()[0] - 3.0).abs() < 1e-9);
+    // A static solve finds the same rest, from a start 1 cm up.
+    let text = dropped_text("spheres = [[0.0, 0.0, 0.0, 0.1]]", 0.11, [0.0; 3])
+        .replace("method = \"implicit-euler\"", "method = \"static\"");
+    let result = run_text(&text);
+    let y = result.bodies[0].position.last().unwrap()[1];
+    println!("sphere, static: rests at {y:.12} m");
+    assert!((y - 0.099).abs() < 1e-9, "{y}");
+    // On obstacles: a capsule across a horizontal capsule obstacle (axis along z, top at
+    // 0.6 m) rests on its middle, 0.6 + 0.05 − 0.0005 m; a ball on a sphere obstacle
+    // (top at 0.6 m) at 0.6 + 0.1 − 0.001 m.
+    for (shape, obstacle, rest) in [
+        (
+            "capsules = [[-0.2, 0.0, 0.0, 0.2, 0.0, 0.0, 0.05]]",
+            "kind = \"capsule\"\na = [3.0, 0.5, -1.0]\nb = [3.0, 0.5, 1.0]\nradius = 0.1",
+            0.6495,
+        ),
+        (
+            "spheres = [[0.0, 0.0, 0.0, 0.1]]",
+            "kind = \"sphere\"\ncentre = [3.0, 0.4, 0.0]\nradius = 0.2",
+            0.699,
+        ),
+    ] {
+        let text = format!(
+            "{}\n[[obstacles]]\n{obstacle}\n",
+            dropped_text(shape, 0.9, [0.0; 3])
+        );
+        let result = run_text(&text);
+        let y = result.bodies[0].position.last().unwrap()[1];
+        println!("{shape} on {obstacle:?}: rests at {y:.9} m");
+        assert!((y - rest).abs() < 1e-6, "{y} vs {rest}");
+    }
 }
