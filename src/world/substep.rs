@@ -270,6 +270,9 @@ impl Simulation {
         let setup = Instant::now();
         if self.integrator.role() == Role::Dynamic {
             self.system.begin_step(h)?;
+        } else {
+            // A static solve has no step to slip over: no friction on the bodies.
+            self.system.bodies.contact.lags.clear();
         }
         self.clock.setup += setup.elapsed().as_secs_f64();
         let stats = self.integrator.step(&mut self.system, h)?;
