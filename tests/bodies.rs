@@ -314,6 +314,16 @@ fn bad_bodies_are_refused_naming_the_field() {
         ),
         ("body = \"bob\"", "body = \"bub\"", "pins[1].body"),
         (
+            "inertia = [0.01, 0.01, 0.01]",
+            "inertia = [0.01, 0.01]",
+            "bodies[0].inertia",
+        ),
+        (
+            "name = \"bob\"",
+            "name = \"bob\"\norientation = [1e308, 1e308, 0.0]",
+            "bodies[0].orientation",
+        ),
+        (
             "method = \"implicit-euler\"",
             "method = \"implicit-midpoint\"",
             "solver.method",

@@ -46,7 +46,10 @@ pub struct BodySpec {
 
 /// An inertia: principal moments or a whole tensor.
 #[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "expected principal moments [I1, I2, I3] or a 3×3 tensor [[…], […], […]] (kg m²)"
+)]
 pub enum InertiaSpec {
     /// `[I1, I2, I3]` about the body's axes.
     Principal([f64; 3]),
@@ -62,6 +65,14 @@ impl InertiaSpec {
             Self::Tensor(rows) => Matrix3::from_fn(|i, j| rows[i][j]),
         }
     }
+
+    /// The values as the scene gives them, for an error message.
+    fn shown(&self) -> String {
+        match self {
+            Self::Principal(m) => format!("{m:?}"),
+            Self::Tensor(rows) => format!("{rows:?}"),
+        }
+    }
 }
 
 impl BodySpec {
@@ -75,7 +86,7 @@ impl BodySpec {
                 splinerod_core::CoreError::InvalidParameter { reason, .. } => reason.to_string(),
                 other => other.to_string(),
             };
-            Error::field(field("inertia"), format!("{:?}", self.inertia), reason)
+            Error::field(field("inertia"), self.inertia.shown(), reason)
         })?;
         for (name, v) in [
             ("position", self.position),
@@ -96,9 +107,19 @@ impl BodySpec {
             finite_vec(&name, [c[3], c[4], c[5]])?;
             positive(&format!("{name}[6]"), c[6])?;
         }
-        let orientation = UnitQuaternion::new(Vector3::from(self.orientation));
+        let turn = Vector3::from(self.orientation);
+        if !turn.norm().is_finite() {
+            let reason = "its length, the angle, must be finite";
+            return Err(Error::field(
+                field("orientation"),
+                format!("{:?}", self.orientation),
+                reason,
+            ));
+        }
+        let orientation = UnitQuaternion::new(turn);
         let position = Vector3::from(self.position);
-        let mut body = RigidBody::at_rest(self.mass, inertia, position, orientation)?;
+        let mut body = RigidBody::at_rest(self.mass, inertia, position, orientation)
+            .map_err(|e| Error::field(field("orientation"), format!("{turn:?}"), e.to_string()))?;
         body.velocity = Vector3::from(self.velocity);
         body.angular_velocity = Vector3::from(self.angular_velocity);
         body.force = gravity * self.mass;
