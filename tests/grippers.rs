@@ -290,6 +290,15 @@ fn bad_clamp_poses_name_the_field() {
             cantilever("direction = [nan, 1.0, 0.0]"),
             "pins[0].direction",
         ),
+        // Finite, but the length under- or overflows: no direction, no angle.
+        (
+            cantilever("direction = [1e-320, 0.0, 0.0]"),
+            "pins[0].direction",
+        ),
+        (
+            pose(&format!("{rest}, [1.0, 0.0, 0.0, 0.0, 1e300, 1e300, 0.0]")),
+            "pins[0].pose[1]",
+        ),
         (
             cantilever(&format!("path = [[0.0, 0.0, 0.0, 0.0]]\npose = [{rest}]")),
             "pins[0].pose",

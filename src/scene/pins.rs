@@ -5,6 +5,7 @@ use crate::scene::{finite_vec, fraction, Scene};
 use crate::world::gripper::PosePath;
 use crate::world::path::{Interpolation, Path};
 use crate::Error;
+use nalgebra::Vector3;
 use serde::Deserialize;
 
 /// `[[pins]]`.
@@ -132,8 +133,9 @@ impl Scene {
                 return Err(Error::field(field, format!("{direction:?}"), only_clamps));
             }
             finite_vec(&field, direction)?;
-            if direction.iter().all(|a| *a == 0.0) {
-                let reason = "must not be zero (the tangent the clamp holds)";
+            let length = Vector3::from(direction).norm_squared();
+            if !(length.is_finite() && length > 0.0) {
+                let reason = "must not be zero (the tangent the clamp holds) and its length finite";
                 return Err(Error::field(field, format!("{direction:?}"), reason));
             }
         }

@@ -81,6 +81,18 @@ impl PosePath {
                     "must be finite",
                 ));
             }
+            let parts = [(1, "translation"), (4, "rotation vector")];
+            for (first, what) in parts {
+                let v = Vector3::new(row[first], row[first + 1], row[first + 2]);
+                if !v.norm_squared().is_finite() {
+                    let reason = format!("its {what}'s length must be finite");
+                    return Err(Error::field(
+                        format!("{field}[{k}]"),
+                        format!("{row:?}"),
+                        reason,
+                    ));
+                }
+            }
         }
         // An out-of-order row is named by its time, `field[k][0]`.
         check_keyframes(keyframes, field).map_err(|e| match e {
