@@ -484,3 +484,45 @@ def test_a_body_is_an_xform_at_its_json_pose(cli, tmp_path):
     side = np.array(shape.GetAttribute("xformOp:scale").Get())
     assert np.allclose(side, math.sqrt(0.03), rtol=1e-15, atol=0)
     print(f"\nbody: translate {moved:.3g} m, orient {turned:.3g} from the JSON")
+
+
+def quaternion_rotate(q, v):
+    """`v` turned by the unit quaternion `q` = (w, x, y, z)."""
+    w, u = q[0], np.array(q[1:])
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def test_a_bodys_contact_shapes_are_its_children(cli, tmp_path):
+    # A capsule (tilted in the body frame) and a sphere on a body dropped on the floor:
+    # the children's world frames put the shapes where the JSON's pose puts them.
+    scene = splinerod.bundled_scene("body_tow").toml.replace(
+        "spheres = [[-0.1, -0.05, -0.1, 0.02], [0.1, -0.05, -0.1, 0.02], "
+        "[-0.1, -0.05, 0.1, 0.02], [0.1, -0.05, 0.1, 0.02]]",
+        "capsules = [[-0.1, -0.05, -0.1, 0.1, -0.04, 0.1, 0.02]]\n"
+        "spheres = [[0.1, -0.05, -0.1, 0.02]]",
+    ).replace("duration = 4.0", "duration = 0.5")
+    stage, result, _ = run(cli, tmp_path, scene)
+    assert validation_errors(stage) == []
+    sphere = stage.GetPrimAtPath("/World/Bodies/block/contact_0")
+    capsule = stage.GetPrimAtPath("/World/Bodies/block/contact_1")
+    assert sphere.GetTypeName() == "Sphere" and capsule.GetTypeName() == "Capsule"
+    assert sphere.GetAttribute("splinerod:kind").Get() == "contactSphere"
+    assert UsdGeom.Capsule(capsule).GetRadiusAttr().Get() == 0.02
+    a, b = np.array([-0.1, -0.05, -0.1]), np.array([0.1, -0.04, 0.1])
+    assert abs(UsdGeom.Capsule(capsule).GetHeightAttr().Get() - np.linalg.norm(b - a)) < 1e-15
+    track = result["bodies"][0]
+    body = stage.GetPrimAtPath("/World/Bodies/block")
+    codes = body.GetAttribute("xformOp:orient").GetTimeSamples()
+    worst = 0.0
+    for code, x, r in zip(codes, track["position"], track["orientation"]):
+        q = rotation_vector_quaternion(np.array(r))
+        m = UsdGeom.Xformable(capsule).ComputeLocalToWorldTransform(code)
+        for end, z in [(a, -1.0), (b, 1.0)]:
+            local = np.array(m.Transform(Gf.Vec3d(0.0, 0.0, z * np.linalg.norm(b - a) / 2)))
+            worst = max(worst, np.abs(local - (x + quaternion_rotate(q, end))).max())
+        m = UsdGeom.Xformable(sphere).ComputeLocalToWorldTransform(code)
+        centre = np.array(m.ExtractTranslation())
+        expected = x + quaternion_rotate(q, np.array([0.1, -0.05, -0.1]))
+        worst = max(worst, np.abs(centre - expected).max())
+    print(f"\ncontact shapes: {worst:.3g} m from where the JSON's pose puts them")
+    assert worst < 1e-12

@@ -14,8 +14,15 @@
 //! a rod's, at the limit a physical tensor allows) is shown as the `Sphere` of the
 //! homogeneous ball with the mean principal moment, `r = √(5 Ī / (2M))`. Either way
 //! `custom string splinerod:kind` says which (`inertiaBox`, `inertiaSphere`).
+//!
+//! The body's contact shapes (`spheres`, `capsules`) follow as children `contact_<j>`,
+//! in the scene's order (spheres first): a `Sphere` of the shape's radius translated to
+//! its centre, or a `Capsule` (axis `Z`, `height` the axis's length) translated to the
+//! axis's midpoint and turned from z onto it; `splinerod:kind` `contactSphere` or
+//! `contactCapsule`. They are what meets the floor and the obstacles.
 
 use super::text::{quoted, tuple, Num, ATTRIBUTE, SAMPLE};
+use crate::world::body_contact::BodyShape;
 use crate::RodSystem;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
@@ -49,6 +56,8 @@ pub(super) struct BodyStyle {
     inertia: Matrix3<Real>,
     /// The child prim.
     shown: Shown,
+    /// Its contact shapes.
+    contacts: Vec<BodyShape>,
 }
 
 /// One body's samples so far: its translate's and its orient's lines.
@@ -75,8 +84,16 @@ pub(super) fn styles(system: &RodSystem) -> Vec<BodyStyle> {
             mass: body.mass,
             inertia: body.inertia,
             shown: shown(body.mass, &body.inertia),
+            contacts: contact_shapes(system, k),
         })
         .collect()
+}
+
+/// Body `k`'s contact shapes, spheres first (the scene's order).
+fn contact_shapes(system: &RodSystem, k: usize) -> Vec<BodyShape> {
+    let mine = system.bodies.contact.shapes.iter().filter(|s| s.body == k);
+    let (spheres, capsules): (Vec<BodyShape>, Vec<BodyShape>) = mine.partition(|s| s.a == s.b);
+    spheres.into_iter().chain(capsules).collect()
 }
 
 /// The box whose principal moments are `inertia`'s for `mass`, or the ball.
@@ -156,6 +173,9 @@ impl BodyStyle {
         }
         writeln!(out, ")")?;
         self.write_shape(out)?;
+        for (j, shape) in self.contacts.iter().enumerate() {
+            write_contact(out, j, shape)?;
+        }
         writeln!(out, "        }}")
     }
 
@@ -204,6 +224,43 @@ impl BodyStyle {
         writeln!(out, "{a}custom string splinerod:kind = {}", quoted(kind))?;
         writeln!(out, "{ATTRIBUTE}}}")
     }
+}
+
+/// Contact shape `j`'s prim (module docs).
+fn write_contact(out: &mut String, j: usize, shape: &BodyShape) -> fmt::Result {
+    let a = format!("{ATTRIBUTE}    ");
+    let (r, axis) = (shape.radius, shape.b - shape.a);
+    let (kind, half) = if axis == Vector3::zeros() {
+        writeln!(out, "{ATTRIBUTE}def Sphere \"contact_{j}\"\n{ATTRIBUTE}{{")?;
+        ("contactSphere", 0.0)
+    } else {
+        writeln!(out, "{ATTRIBUTE}def Capsule \"contact_{j}\"\n{ATTRIBUTE}{{")?;
+        writeln!(out, "{a}uniform token axis = \"Z\"")?;
+        writeln!(out, "{a}double height = {}", Num(axis.norm()))?;
+        ("contactCapsule", 0.5 * axis.norm())
+    };
+    writeln!(out, "{a}double radius = {}", Num(r))?;
+    let (m, p, zm, zp) = (Num(-r), Num(r), Num(-r - half), Num(r + half));
+    writeln!(
+        out,
+        "{a}float3[] extent = [({m}, {m}, {zm}), ({p}, {p}, {zp})]"
+    )?;
+    write!(out, "{a}double3 xformOp:translate = ")?;
+    tuple(out, &((shape.a + shape.b) * 0.5), Num)?;
+    out.push('\n');
+    let mut order = "\"xformOp:translate\"".to_string();
+    if half > 0.0 {
+        let turn = UnitQuaternion::rotation_between(&Vector3::z(), &axis).unwrap_or_else(|| {
+            UnitQuaternion::from_scaled_axis(Vector3::x() * std::f64::consts::PI)
+        });
+        write!(out, "{a}quatd xformOp:orient = ")?;
+        quaternion(out, &turn)?;
+        out.push('\n');
+        order.push_str(", \"xformOp:orient\"");
+    }
+    writeln!(out, "{a}uniform token[] xformOpOrder = [{order}]")?;
+    writeln!(out, "{a}custom string splinerod:kind = {}", quoted(kind))?;
+    writeln!(out, "{ATTRIBUTE}}}")
 }
 
 #[cfg(test)]
