@@ -1,0 +1,94 @@
+//! The lanes' copy of their tension tables ([`super::lanes`]): each function's place,
+//! weights \\(m_k\\), \\(EA/m_k\\) and packed `G_k` entries one vector per entry, gathered
+//! from the [`LANES`] tables once and kept while the same tables and stiffnesses come
+//! back (a group stepped many times in its lanes, #47, gathers them once instead of at
+//! every evaluation). The values are the tables' own, copied; `EA/m_k` is the division
+//! the evaluation made, made once.
+
+use super::lanes::MomentTerm;
+use splinerod_core::{Lanes, LANES};
+use std::cell::RefCell;
+
+/// One function's place in the lanes' table.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LaneFunction {
+    /// First control point touched.
+    pub first: usize,
+    /// Control points touched.
+    pub width: usize,
+    /// Where its packed `G_k` starts in [`LaneTable::g`].
+    pub offset: usize,
+    /// Its packed entries.
+    pub len: usize,
+    /// \\(m_k\\) per lane.
+    pub m: Lanes,
+    /// \\(EA/m_k\\) per lane (0 where \\(m_k \le 0\\)).
+    pub c: Lanes,
+}
+
+/// The gathered tables of the last moment terms evaluated on a thread.
+#[derive(Debug, Default)]
+pub(super) struct LaneTable {
+    /// Per lane: the table's stamp and the stiffness's bits (stamps are never 0, so
+    /// an empty key matches no terms).
+    key: [(u64, u64); LANES],
+    /// Per function, in order.
+    pub functions: Vec<LaneFunction>,
+    /// Every function's packed `G_k`, one vector per entry.
+    pub g: Vec<Lanes>,
+}
+
+thread_local! {
+    /// This thread's [`LaneTable`] (grown once; no allocation while the sizes hold).
+    static LANE_TABLE: RefCell<LaneTable> = RefCell::new(LaneTable::default());
+}
+
+/// Runs `f` with this thread's [`LaneTable`] gathered for `terms` (checked compatible:
+/// one shape).
+pub(super) fn with_lane_table<R>(
+    terms: [&MomentTerm<'_>; LANES],
+    f: impl FnOnce(&LaneTable) -> R,
+) -> R {
+    LANE_TABLE.with(|table| {
+        let mut table = table.borrow_mut();
+        let key = terms.map(|t| (t.table().stamp(), t.stiffness().to_bits()));
+        if key != table.key || key.iter().any(|k| k.0 == 0) {
+            table.gather(terms);
+            table.key = key;
+        }
+        f(&table)
+    })
+}
+
+impl LaneTable {
+    /// Gathers every function of `terms`' tables, lane by lane.
+    fn gather(&mut self, terms: [&MomentTerm<'_>; LANES]) {
+        self.functions.clear();
+        self.g.clear();
+        for slot in 0..terms[0].table().functions() {
+            let (first, width, _, packed) = terms[0].table().function(slot);
+            let len = packed.len();
+            let tables = terms.map(|t| t.table().function(slot));
+            let m: Lanes = std::array::from_fn(|l| tables[l].2);
+            let c = std::array::from_fn(|l| {
+                if m[l] > 0.0 {
+                    terms[l].stiffness() / m[l]
+                } else {
+                    0.0
+                }
+            });
+            let offset = self.g.len();
+            let gl = tables.map(|t| &t.3[..len]);
+            self.g
+                .extend((0..len).map(|e| -> Lanes { std::array::from_fn(|l| gl[l][e]) }));
+            self.functions.push(LaneFunction {
+                first,
+                width,
+                offset,
+                len,
+                m,
+                c,
+            });
+        }
+    }
+}
