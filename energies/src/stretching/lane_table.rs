@@ -92,3 +92,63 @@ impl LaneTable {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::lanes::{add_lanes, LaneTerm};
+    use crate::{LaneForm, Lifecycle, Stretching};
+    use nalgebra::Vector3;
+    use splinerod_core::{BSplineSpace, Lanes, Material, Real, Rod, LANES};
+
+    fn rod(stretch: Real) -> Rod {
+        let material = Material {
+            rest_length: 1.0,
+            linear_density: 0.1,
+        };
+        let basis = BSplineSpace::clamped_uniform(3, 9, 1.0).expect("basis");
+        let end = Vector3::new(stretch, 0.1, 0.0);
+        Rod::straight(material, Box::new(basis), Vector3::zeros(), end).expect("rod")
+    }
+
+    /// Each lane's energy from `energies` (one per lane) on `rods`.
+    fn energies(energies: &[Stretching], rods: &[Rod]) -> Lanes {
+        let terms: [LaneTerm<'_>; LANES] =
+            std::array::from_fn(|l| energies[l].lane_term(&rods[l]).expect("lane form"));
+        let n = rods[0].len();
+        let q: Vec<Lanes> = (0..3 * n)
+            .map(|k| std::array::from_fn(|l| rods[l].positions[k / 3][k % 3]))
+            .collect();
+        let mut energy = [0.0; LANES];
+        assert_eq!(add_lanes(&terms, &q, &mut energy, None), [true; LANES]);
+        energy
+    }
+
+    /// The gathered tables follow the terms: another stiffness or a new tabulation is
+    /// gathered anew, and coming back to the first terms gives their bits again.
+    #[test]
+    fn the_gathered_tables_follow_the_tables_and_stiffnesses() {
+        let rods: Vec<Rod> = (0..LANES).map(|l| rod(1.1 + 0.01 * l as Real)).collect();
+        let make = |ea: Real| -> Vec<Stretching> {
+            rods.iter()
+                .map(|rod| {
+                    let mut s = Stretching::new(ea).expect("stretching");
+                    s.begin_step(rod, 1e-3).expect("table");
+                    s
+                })
+                .collect()
+        };
+        let (soft, stiff) = (make(50.0), make(80.0));
+        let first = energies(&soft, &rods);
+        let other = energies(&stiff, &rods);
+        for l in 0..LANES {
+            assert!((other[l] / first[l] - 1.6).abs() < 1e-12, "lane {l}");
+        }
+        assert_eq!(energies(&soft, &rods), first);
+        // A rebuilt table takes a new stamp (so its lanes are gathered again).
+        let mut rebuilt = make(50.0);
+        let stamp = rebuilt[0].table.stamp();
+        rebuilt[0].table.build(&soft[0], &rods[0]);
+        assert_ne!(rebuilt[0].table.stamp(), stamp);
+        assert_eq!(energies(&rebuilt, &rods), first);
+    }
+}
