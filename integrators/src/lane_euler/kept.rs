@@ -129,9 +129,15 @@ impl LaneEuler {
         for ((t, q0), x) in self.trial.iter_mut().zip(&self.q0).zip(&self.x) {
             *t = std::array::from_fn(|l| q0[l] + x[l] * dt);
         }
+        // Every lane's test in one pass over the lanes (no early exit, no branch).
+        let mut finite = [true; LANES];
+        for v in self.trial.iter().chain(&self.x) {
+            for l in 0..LANES {
+                finite[l] &= v[l].is_finite();
+            }
+        }
         for l in 0..LANES {
-            let finite = |v: &[Lanes]| v.iter().all(|x| x[l].is_finite());
-            if self.failed[l].is_none() && !(finite(&self.trial) && finite(&self.x)) {
+            if self.failed[l].is_none() && !finite[l] {
                 self.failed[l] = Some("non-finite state");
             }
         }
