@@ -154,6 +154,10 @@ impl LaneEuler {
 /// early exit and no branch. `x − x` is 0 for a finite `x` and NaN for an infinite or
 /// NaN one, so a lane's sum of them stays 0 exactly while its entries are finite.
 #[inline(always)]
+#[allow(
+    clippy::eq_op,
+    reason = "x − x is the test: 0 for a finite x, NaN otherwise"
+)]
 fn finite_lanes(a: &[Lanes], b: &[Lanes]) -> [bool; LANES] {
     let mut sum = ZERO;
     for v in a.iter().chain(b) {
