@@ -6,11 +6,12 @@
 //! the evaluation made, made once.
 
 use super::lanes::MomentTerm;
+use splinerod_core::lanes::ZERO;
 use splinerod_core::{Lanes, LANES};
 use std::cell::RefCell;
 
 /// One function's place in the lanes' table.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(super) struct LaneFunction {
     /// First control point touched.
     pub first: usize,
@@ -63,12 +64,19 @@ pub(super) fn with_lane_table<R>(
 impl LaneTable {
     /// Gathers every function of `terms`' tables, lane by lane.
     fn gather(&mut self, terms: [&MomentTerm<'_>; LANES]) {
-        self.functions.clear();
-        self.g.clear();
-        for slot in 0..terms[0].table().functions() {
-            let (first, width, _, packed) = terms[0].table().function(slot);
-            let len = packed.len();
+        let count = terms[0].table().functions();
+        let stride = (0..count)
+            .map(|s| terms[0].table().function(s).3.len())
+            .max();
+        let stride = stride.unwrap_or(0).max(1);
+        // Sized in place: no allocation, and no pass, while the shape holds.
+        self.functions.resize(count, LaneFunction::default());
+        self.g.resize(count * stride, ZERO);
+        let rows = self.g.chunks_exact_mut(stride);
+        for (slot, (f, g)) in self.functions.iter_mut().zip(rows).enumerate() {
             let tables = terms.map(|t| t.table().function(slot));
+            let (first, width, _, packed) = tables[0];
+            let len = packed.len();
             let m: Lanes = std::array::from_fn(|l| tables[l].2);
             let c = std::array::from_fn(|l| {
                 if m[l] > 0.0 {
@@ -77,18 +85,19 @@ impl LaneTable {
                     0.0
                 }
             });
-            let offset = self.g.len();
+            // Each lane's G_k entry by entry: one vector per entry.
             let gl = tables.map(|t| &t.3[..len]);
-            self.g
-                .extend((0..len).map(|e| -> Lanes { std::array::from_fn(|l| gl[l][e]) }));
-            self.functions.push(LaneFunction {
+            for (e, entry) in g[..len].iter_mut().enumerate() {
+                *entry = std::array::from_fn(|l| gl[l][e]);
+            }
+            *f = LaneFunction {
                 first,
                 width,
-                offset,
+                offset: slot * stride,
                 len,
                 m,
                 c,
-            });
+            };
         }
     }
 }
