@@ -138,15 +138,11 @@ fn add_gravity(
     // at once.
     let n = gravity.iter().map(|(_, m)| m.len()).min().unwrap_or(0);
     let g: [Lanes; 3] = std::array::from_fn(|c| std::array::from_fn(|l| gravity[l].0[c]));
-    // Each lane's masses cut to `n` and the points as 3-chunks: no check per entry.
-    let masses: [&[Real]; LANES] = gravity.map(|(_, m)| &m[..n]);
-    let mass = |i: usize| -> Lanes { std::array::from_fn(|l| masses[l][i]) };
-    let (points, _) = q[..3 * n.min(q.len() / 3)].as_chunks::<3>();
     let mut sum = [0.0; LANES];
-    for (i, p) in points.iter().enumerate() {
-        let m = mass(i);
+    for i in 0..n {
+        let m: Lanes = std::array::from_fn(|l| gravity[l].1[i]);
         for l in 0..LANES {
-            let dot = g[0][l] * p[0][l] + g[1][l] * p[1][l] + g[2][l] * p[2][l];
+            let dot = g[0][l] * q[3 * i][l] + g[1][l] * q[3 * i + 1][l] + g[2][l] * q[3 * i + 2][l];
             sum[l] += m[l] * dot;
         }
     }
@@ -154,13 +150,11 @@ fn add_gravity(
         energy[l] -= sum[l];
     }
     if let Some(gradient) = gradient {
-        let len = 3 * n.min(gradient.len() / 3);
-        let (points, _) = gradient[..len].as_chunks_mut::<3>();
-        for (i, p) in points.iter_mut().enumerate() {
-            let m = mass(i);
+        for i in 0..n {
+            let m: Lanes = std::array::from_fn(|l| gravity[l].1[i]);
             for c in 0..3 {
                 for l in 0..LANES {
-                    p[c][l] -= g[c][l] * m[l];
+                    gradient[3 * i + c][l] -= g[c][l] * m[l];
                 }
             }
         }
