@@ -3,6 +3,7 @@
 //! those of [`super::table::TensionTable::for_each`] and the tabulated Hessian of
 //! [`super::mixed`], in the same order, each over the lanes.
 
+use super::lane_table::{with_lane_table, LaneTable};
 use super::table::TensionTable;
 use super::Stretching;
 use crate::lanes::{LaneField, LaneTerm};
@@ -11,9 +12,6 @@ use splinerod_core::{Derivatives, LaneBand, Lanes, QuadratureTable, Real, Rod, L
 
 /// Widest function block a lane evaluation takes: `2d` for degree 5.
 const MAX_LANE_WIDTH: usize = 10;
-
-/// Packed entries of a block of [`MAX_LANE_WIDTH`].
-const MAX_PACKED: usize = MAX_LANE_WIDTH * (MAX_LANE_WIDTH + 1) / 2;
 
 /// One rod's lumped mixed stretching as a lane term: its table, `EA` and multipliers.
 #[derive(Debug, Clone, Copy)]
@@ -43,6 +41,16 @@ impl MomentTerm<'_> {
     /// Whether both tables place their functions alike.
     pub(crate) fn same_shape(&self, other: &MomentTerm<'_>) -> bool {
         self.table.same_shape(other.table)
+    }
+
+    /// The rod's tension table.
+    pub(super) fn table(&self) -> &TensionTable {
+        self.table
+    }
+
+    /// `EA`, N.
+    pub(super) fn stiffness(&self) -> Real {
+        self.stiffness
     }
 
     fn multiplier(&self, index: usize) -> Real {
@@ -84,13 +92,15 @@ pub(crate) fn add_moment_lanes(
     if !idle.contains(&true) {
         return idle;
     }
-    #[cfg(target_arch = "x86_64")]
-    if splinerod_core::lanes::wide() {
-        // SAFETY: the processor has AVX2 and FMA (checked on the line above).
-        unsafe { moments_wide(terms, q, energy, derivatives) };
-        return idle;
-    }
-    moments::<false>(terms, q, energy, derivatives);
+    with_lane_table(terms, |table| {
+        #[cfg(target_arch = "x86_64")]
+        if splinerod_core::lanes::wide() {
+            // SAFETY: the processor has AVX2 and FMA (checked on the line above).
+            unsafe { moments_wide(terms, table, q, energy, derivatives) };
+            return;
+        }
+        moments::<false>(terms, table, q, energy, derivatives);
+    });
     idle
 }
 
@@ -146,36 +156,31 @@ const MAX_SPAN_POINTS: usize = 16;
 #[target_feature(enable = "avx2,fma")]
 unsafe fn moments_wide(
     terms: [&MomentTerm<'_>; LANES],
+    table: &LaneTable,
     q: &LaneField,
     energy: &mut Lanes,
     derivatives: Option<Derivatives<'_>>,
 ) {
-    moments::<true>(terms, q, energy, derivatives);
+    moments::<true>(terms, table, q, energy, derivatives);
 }
 
-/// Energy, gradient and Hessian of the moment terms, function by function.
+/// Energy, gradient and Hessian of the moment terms, function by function, from their
+/// gathered tables `table`.
 #[inline(always)]
 fn moments<const FUSED: bool>(
     terms: [&MomentTerm<'_>; LANES],
+    table: &LaneTable,
     q: &LaneField,
     energy: &mut Lanes,
     mut derivatives: Option<Derivatives<'_>>,
 ) {
     let rows = terms[0].table.rows();
-    let mut g = [ZERO; MAX_PACKED];
+    let hats = terms.iter().any(|t| t.has_multipliers());
     let mut r = [[ZERO; 3]; MAX_LANE_WIDTH];
     let mut db = [[ZERO; 3]; MAX_LANE_WIDTH];
-    for slot in 0..terms[0].table.functions() {
-        let (first, width, _, packed) = terms[0].table.function(slot);
-        // Each lane's G_k entry by entry: one vector per entry.
-        let len = packed.len();
-        let tables = terms.map(|t| t.table.function(slot));
-        let m: Lanes = std::array::from_fn(|l| tables[l].2);
-        let gl = tables.map(|t| &t.3[..len]);
-        for (e, slot) in g[..len].iter_mut().enumerate() {
-            *slot = std::array::from_fn(|l| gl[l][e]);
-        }
-        let g = &g[..len];
+    for (slot, f) in table.functions.iter().enumerate() {
+        let (first, width) = (f.first, f.width);
+        let g = &table.g[f.offset..f.offset + f.len];
         moment_derivatives::<FUSED>(q, first, width, g, rows, &mut r, &mut db);
         let mut quad = ZERO;
         for (ra, da) in r[..width].iter().zip(&db[..width]) {
@@ -183,22 +188,22 @@ fn moments<const FUSED: bool>(
                 fma::<FUSED>(&mut quad, ra[c], da[c]);
             }
         }
-        let (mut c, mut tension) = (ZERO, ZERO);
+        // Without multipliers every lane's is 0 (`multiplier`'s default).
+        let hat: Lanes = match hats {
+            true => std::array::from_fn(|l| terms[l].multiplier(slot + 1)),
+            false => ZERO,
+        };
+        let (c, mut tension) = (f.c, ZERO);
         for l in 0..LANES {
-            let b = 0.5 * (quad[l] - m[l]);
-            let hat = terms[l].multiplier(slot + 1);
-            c[l] = if m[l] > 0.0 {
-                terms[l].stiffness / m[l]
-            } else {
-                0.0
-            };
-            tension[l] = hat + c[l] * b;
-            energy[l] += 0.5 * (tension[l] + hat) * b;
+            let b = 0.5 * (quad[l] - f.m[l]);
+            tension[l] = hat[l] + c[l] * b;
+            energy[l] += 0.5 * (tension[l] + hat[l]) * b;
         }
         if let Some(d) = derivatives.as_mut() {
-            for (a, da) in db[..width].iter().enumerate() {
+            let (points, _) = d.gradient[3 * first..3 * (first + width)].as_chunks_mut::<3>();
+            for (point, da) in points.iter_mut().zip(&db[..width]) {
                 for coord in 0..3 {
-                    fma::<FUSED>(&mut d.gradient[3 * (first + a) + coord], da[coord], tension);
+                    fma::<FUSED>(&mut point[coord], da[coord], tension);
                 }
             }
             let h = d.hessian_scale;
@@ -220,8 +225,9 @@ fn moment_derivatives<const FUSED: bool>(
     db: &mut [[Lanes; 3]; MAX_LANE_WIDTH],
 ) {
     let origin = [q[3 * first], q[3 * first + 1], q[3 * first + 2]];
-    for (a, ra) in r[..width].iter_mut().enumerate() {
-        *ra = std::array::from_fn(|c| sub(q[3 * (first + a) + c], origin[c]));
+    let (points, _) = q[3 * first..3 * (first + width)].as_chunks::<3>();
+    for (ra, point) in r[..width].iter_mut().zip(points) {
+        *ra = std::array::from_fn(|c| sub(point[c], origin[c]));
     }
     // The first row starts every sum of `db` (no pass zeroing it first).
     if width > 0 {
@@ -347,10 +353,10 @@ mod tests {
                 hessian_scale: 1.0,
             };
             let terms = [&term; LANES];
-            match fused {
-                true => moments::<true>(terms, &q, &mut e, Some(d)),
-                false => moments::<false>(terms, &q, &mut e, Some(d)),
-            }
+            with_lane_table(terms, |table| match fused {
+                true => moments::<true>(terms, table, &q, &mut e, Some(d)),
+                false => moments::<false>(terms, table, &q, &mut e, Some(d)),
+            });
             (e, g, h)
         };
         let (a, b) = (run(false), run(true));

@@ -34,6 +34,7 @@ mod blocks;
 mod capabilities;
 mod gram;
 mod guard;
+mod lane_table;
 mod lanes;
 mod mixed;
 mod multipliers;

@@ -27,6 +27,7 @@
 use super::Stretching;
 use nalgebra::Vector3;
 use splinerod_core::{Real, Rod, MAX_DEGREE};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Control points one tension function can touch: the functions of its `d` spans.
 pub(super) const MAX_WIDTH: usize = 2 * MAX_DEGREE;
@@ -50,7 +51,13 @@ pub(super) struct TensionTable {
     m: Vec<Real>,
     /// Per function: the packed upper triangle of `G_k`, rows of the full width `W`.
     g: Vec<Real>,
+    /// Which tabulation this is ([`Self::stamp`]; 0: none yet).
+    stamp: u64,
 }
+
+/// The stamp of the next tabulation: one counter for every table, so that no two
+/// tabulations of a process share one.
+static STAMPS: AtomicU64 = AtomicU64::new(1);
 
 /// One tension function's strain moment and its derivatives at the rod's positions.
 #[derive(Debug, Clone, Copy)]
@@ -126,6 +133,14 @@ impl TensionTable {
             }
         }
         (self.epoch, self.points) = (rod.topology_epoch(), table.len());
+        self.stamp = STAMPS.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A number that identifies this tabulation (its places, weights and `G_k`): each
+    /// [`Self::build`] takes a new one, shared by no other table (clones keep it, with
+    /// the contents); 0 before the first.
+    pub fn stamp(&self) -> u64 {
+        self.stamp
     }
 
     /// The first control point and the width of every function's block: the points

@@ -129,9 +129,9 @@ impl LaneEuler {
         for ((t, q0), x) in self.trial.iter_mut().zip(&self.q0).zip(&self.x) {
             *t = std::array::from_fn(|l| q0[l] + x[l] * dt);
         }
+        let finite = finite_lanes(&self.trial, &self.x);
         for l in 0..LANES {
-            let finite = |v: &[Lanes]| v.iter().all(|x| x[l].is_finite());
-            if self.failed[l].is_none() && !(finite(&self.trial) && finite(&self.x)) {
+            if self.failed[l].is_none() && !finite[l] {
                 self.failed[l] = Some("non-finite state");
             }
         }
@@ -147,5 +147,41 @@ impl LaneEuler {
         self.v0.copy_from_slice(&self.x);
         k.multipliers.clone_from(&self.multipliers);
         (k.stats, k.dt, k.complete, k.valid) = (self.stats, dt, true, true);
+    }
+}
+
+/// Per lane, whether every entry of `a` and `b` is finite: one pass over the lanes, no
+/// early exit and no branch. `x − x` is 0 for a finite `x` and NaN for an infinite or
+/// NaN one, so a lane's sum of them stays 0 exactly while its entries are finite.
+#[inline(always)]
+#[allow(
+    clippy::eq_op,
+    reason = "x − x is the test: 0 for a finite x, NaN otherwise"
+)]
+fn finite_lanes(a: &[Lanes], b: &[Lanes]) -> [bool; LANES] {
+    let mut sum = ZERO;
+    for v in a.iter().chain(b) {
+        for l in 0..LANES {
+            sum[l] += v[l] - v[l];
+        }
+    }
+    sum.map(|s| s == 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finite_lanes_are_those_whose_every_entry_is_finite() {
+        let mut a = vec![[1.0, -2.0, 0.0, 3.5]; 6];
+        let mut b = vec![[0.5; LANES]; 4];
+        assert_eq!(finite_lanes(&a, &b), [true; LANES]);
+        a[5][1] = Real::NAN;
+        b[0][3] = Real::NEG_INFINITY;
+        assert_eq!(finite_lanes(&a, &b), [true, false, true, false]);
+        b[3][0] = Real::INFINITY;
+        assert_eq!(finite_lanes(&a, &b), [false, false, true, false]);
+        assert_eq!(finite_lanes(&[], &[]), [true; LANES]);
     }
 }

@@ -428,7 +428,15 @@ impl LaneEuler {
     ) {
         let phi0 = search.contains(&true).then(|| self.merit(energy, dt));
         for ((t, x), d) in self.trial.iter_mut().zip(&self.x).zip(&self.flat) {
-            *t = std::array::from_fn(|l| if active[l] { x[l] + d[l] } else { x[l] });
+            // Each lane's sum taken, kept where the lane is active (a select, no branch).
+            *t = std::array::from_fn(|l| {
+                let moved = x[l] + d[l];
+                if active[l] {
+                    moved
+                } else {
+                    x[l]
+                }
+            });
         }
         std::mem::swap(&mut self.x, &mut self.trial);
         let Some(phi0) = phi0 else {
