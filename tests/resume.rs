@@ -150,6 +150,9 @@ fn a_scene_with_a_rigid_body_resumes_exactly() {
         ],
     );
     resumes_exactly("bodies-bdf2", &bdf2, &[1, 170]);
+    // Friction on a body's shapes keeps nothing across steps (its contacts are frozen
+    // again at every step's start): stopped while the towed block slides.
+    resumes_exactly("bodies-friction", Path::new("scenes/body_tow.toml"), &[260]);
 }
 
 #[test]
